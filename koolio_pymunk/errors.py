@@ -1,0 +1,34 @@
+"""User-facing errors.
+
+Every problem caused by input (an arena file, a configuration file, a Q-table file, a
+command-line flag) is raised as a :class:`KoolioError` whose message is a single line
+naming the file, the item and the problem, for example::
+
+    arenas/bad.yaml: walls[3]: repeated point (10, 20), same as walls[1]
+
+The command line prints that line as ``koolio-pm: error: <message>`` and exits with
+status 2, without a traceback.
+"""
+
+from __future__ import annotations
+
+
+class KoolioError(Exception):
+    """Bad input: one line, naming the file, the item and the problem."""
+
+
+class ArenaError(KoolioError):
+    """A malformed or invalid arena file."""
+
+
+class ConfigError(KoolioError):
+    """A malformed or invalid configuration (file, YAML section or flag)."""
+
+
+class QTableError(KoolioError):
+    """A corrupt, truncated or mismatched Q-table file."""
+
+
+def located(source: str, item: str, problem: str) -> str:
+    """Format the one-line message ``source: item: problem`` (item may be empty)."""
+    return f"{source}: {item}: {problem}" if item else f"{source}: {problem}"
