@@ -1,0 +1,263 @@
+"""``koolio-pm``: the command line.
+
+Every command prints a one-line ``koolio-pm: error: ...`` and exits with status 2 on bad
+input (a malformed arena, a corrupt or mismatched Q-table, a wrong flag), never a
+traceback. Commands that need drawing (``view``, ``plot``) import pygame / matplotlib
+only when they run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import sys
+from collections.abc import Sequence
+from typing import NoReturn
+
+from .errors import KoolioError
+
+DEFAULT_QTABLE = "runs/hallway.qtable"
+DEFAULT_LOG = "runs/train.csv"
+DEFAULT_EPISODES = 1500
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors (no usage block) and exit status 2."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
+
+
+def _add_env_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--arena", default="hallway", help="arena file or built-in name (hallway, room, obstacles)"
+    )
+    p.add_argument("--config", default=None, help="YAML configuration file (see config.py)")
+    p.add_argument(
+        "--goal",
+        default=None,
+        help="goal name (default: the arena's active goal); 'random': a random goal per episode",
+    )
+    p.add_argument("--seed", type=int, default=0, help="run seed (default 0)")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="koolio-pm", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    p = sub.add_parser("train", help="headless episodic Q-learning")
+    _add_env_args(p)
+    p.add_argument(
+        "--episodes",
+        type=int,
+        default=DEFAULT_EPISODES,
+        help=f"episodes to run (default {DEFAULT_EPISODES})",
+    )
+    p.add_argument(
+        "--qtable",
+        default=DEFAULT_QTABLE,
+        help=f"Q-table file, resumed if present; backup beside it (default {DEFAULT_QTABLE})",
+    )
+    p.add_argument(
+        "--log", default=DEFAULT_LOG, help=f"per-episode CSV log (default {DEFAULT_LOG})"
+    )
+    p.add_argument(
+        "--discard-unfinished",
+        action="store_true",
+        help="on Ctrl-C discard the unfinished episode (Exit Without Save)",
+    )
+    p.add_argument("--quiet", action="store_true", help="no progress lines")
+    p.add_argument(
+        "--robots",
+        type=int,
+        default=1,
+        help="robots learning into one shared table, each in its own copy of the arena (default 1)",
+    )
+    p.add_argument(
+        "--init-qtable",
+        default=None,
+        help="start from this table (e.g. one back from the robot) when --qtable "
+        "does not exist yet",
+    )
+
+    p = sub.add_parser("eval", help="greedy evaluation of a Q-table")
+    _add_env_args(p)
+    p.add_argument("--qtable", default=DEFAULT_QTABLE, help="Q-table file")
+    p.add_argument("--episodes", type=int, default=100, help="episodes (default 100)")
+    p.add_argument("--json", action="store_true", help="print the figures as JSON")
+
+    p = sub.add_parser("check-arena", help="validate an arena file")
+    p.add_argument("file", help="arena file or built-in name")
+    p.add_argument("--robot", default="koolio", help="robot profile for clearance checks")
+
+    p = sub.add_parser("info", help="state-space sizes (paper §5.4.8) and table figures")
+    p.add_argument("--config", default=None, help="YAML configuration file")
+    p.add_argument("--qtable", default=None, help="also describe this Q-table file")
+
+    for name, module in EXTRA_COMMANDS.items():
+        mod = importlib.import_module(module)
+        p = sub.add_parser(name, help=(mod.__doc__ or name).strip().splitlines()[0])
+        mod.add_arguments(p)
+    return parser
+
+
+#: Commands that live in their own modules: each module has ``add_arguments(parser)`` and
+#: ``run(args) -> int`` and imports heavy dependencies (pygame, matplotlib, ray) in ``run``.
+EXTRA_COMMANDS: dict[str, str] = {}
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        if args.command in EXTRA_COMMANDS:
+            return int(importlib.import_module(EXTRA_COMMANDS[args.command]).run(args) or 0)
+        return int(COMMANDS[args.command](args) or 0)
+    except KoolioError as exc:
+        print(f"koolio-pm: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("koolio-pm: interrupted", file=sys.stderr)
+        return 130
+
+
+# --- commands ---------------------------------------------------------------------------
+
+
+def _make_env(args: argparse.Namespace):
+    from .env import KoolioEnv
+
+    return KoolioEnv(arena=args.arena, config=args.config, goal=args.goal)
+
+
+def _positive(value: int, flag: str) -> None:
+    if value < 0:
+        raise KoolioError(f"{flag}: must be >= 0, got {value}")
+
+
+def cmd_train(args: argparse.Namespace) -> int:
+    from .qtable import QTableStore
+    from .training import train
+
+    _positive(args.episodes, "--episodes")
+    env = _make_env(args)
+    say = (lambda s: None) if args.quiet else print
+    say("koolio-pm train")
+    for key in (
+        "arena",
+        "goal",
+        "episodes",
+        "seed",
+        "qtable",
+        "log",
+        "config",
+        "discard_unfinished",
+    ):
+        say(f"  {key}: {getattr(args, key)}")
+    say(f"  active goal: {env.goal_name} at {env.world_arena.goal().at}")
+    say("configuration:")
+    for line in env.config.to_yaml().splitlines():
+        say("  " + line)
+    result = train(
+        env,
+        QTableStore(args.qtable),
+        args.episodes,
+        args.seed,
+        args.log,
+        discard_unfinished=args.discard_unfinished,
+        report=None if args.quiet else print,
+    )
+    rate = result.goals / max(1, result.episodes_run)
+    say(
+        f"done: {result.episodes_run} episodes, {result.goals} at the goal ({rate:.1%}), "
+        f"{result.steps} steps in {result.seconds:.1f} s "
+        f"({result.steps / max(1e-9, result.seconds):.0f} steps/s); "
+        f"table {len(result.table)} states -> {args.qtable}"
+    )
+    return 130 if result.interrupted else 0
+
+
+def cmd_eval(args: argparse.Namespace) -> int:
+    from .qtable import check_compatible, load_qtable
+    from .training import evaluate, sensor_signature
+
+    _positive(args.episodes, "--episodes")
+    env = _make_env(args)
+    table = load_qtable(args.qtable)
+    check_compatible(table, env.layout, sensor_signature(env.config), args.qtable)
+    res = evaluate(env, table, args.episodes, args.seed)
+    if args.json:
+        print(json.dumps(res.as_dict(), sort_keys=True))
+    else:
+        print(
+            f"greedy evaluation of {args.qtable} on {env.arena.name}, goal {res.goal}, "
+            f"{res.episodes} episodes, seed {args.seed}"
+        )
+        print(f"  goal rate          {res.goal_rate:7.1%}")
+        print(f"  end-of-world rate  {res.end_of_world_rate:7.1%}")
+        print(f"  truncated rate     {res.truncated_rate:7.1%}")
+        print(f"  mean steps         {res.mean_steps:7.1f}")
+        print(f"  mean bumps         {res.mean_bumps:7.1f}")
+        print(f"  mean return        {res.mean_reward:7.1f}")
+    return 0
+
+
+def cmd_check_arena(args: argparse.Namespace) -> int:
+    from .arena import load_arena
+    from .config import ROBOT_PROFILES
+
+    if args.robot not in ROBOT_PROFILES:
+        raise KoolioError(
+            f"--robot: unknown profile {args.robot!r} (valid: {', '.join(ROBOT_PROFILES)})"
+        )
+    arena = load_arena(args.file, ROBOT_PROFILES[args.robot])
+    xmin, ymin, xmax, ymax = arena.bounds()
+    print(
+        f"{arena.source}: ok: '{arena.name}', {len(arena.walls)} wall points, "
+        f"{len(arena.obstacles)} obstacles, {len(arena.goals)} goals "
+        f"(active {arena.active_goal}), {len(arena.end_of_world)} end-of-world markers, "
+        f"{xmax - xmin:g} x {ymax - ymin:g} in"
+    )
+    return 0
+
+
+def cmd_info(args: argparse.Namespace) -> int:
+    from .config import load_config
+    from .qtable import PAPER_ORIGINAL_FIELDS, KeywordLayout, human_bytes, load_qtable
+    from .sensors import state_fields
+
+    cfg = load_config(args.config)
+    paper = KeywordLayout(PAPER_ORIGINAL_FIELDS)
+    now = KeywordLayout(tuple(state_fields(cfg.sensors)))
+    print("State space (paper §5.4.8; dense tables of 8-byte doubles):")
+    for title, lay in (
+        ("paper's first design (compass, 6 cameras x 4, 8 sonars x 5)", paper),
+        ("this configuration", now),
+    ):
+        print(f"  {title}:")
+        print(f"    states  {lay.n_states:>16,}")
+        print(f"    entries {lay.n_entries:>16,}  (x {lay.n_actions} actions)")
+        print(f"    dense   {human_bytes(lay.dense_bytes()):>16}")
+    print(f"Keyword ({now.total_bits} bits, Table 12):")
+    print("  " + " | ".join(f"{n}<<{s}" for (n, _), s in zip(now.fields, now.shifts)) + " | Action")
+    if args.qtable:
+        table = load_qtable(args.qtable)
+        share = table.entries / table.layout.n_entries
+        print(
+            f"Q-table {args.qtable}: {len(table):,} states visited, {table.entries:,} entries "
+            f"({share:.3%} of dense), {human_bytes(table.nbytes())} in the file, "
+            f"{table.meta.get('episodes', 0)} episodes"
+        )
+    return 0
+
+
+COMMANDS = {
+    "train": cmd_train,
+    "eval": cmd_eval,
+    "check-arena": cmd_check_arena,
+    "info": cmd_info,
+}
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

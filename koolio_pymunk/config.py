@@ -1,0 +1,412 @@
+"""Configuration: typed dataclasses with the paper's names, units and defaults.
+
+Every constant of the paper keeps a recognisable snake_case name (``RotateActionArc`` ->
+``rotate_action_arc_deg``, ``MaxCameraView`` -> ``max_camera_view`` ...). Where the paper
+gives a value it is the default; where it is silent the default is this project's choice
+and the field's docstring says so.
+
+A YAML configuration file holds any subset of the sections below, for example::
+
+    actions: {move_action_distance: 12}
+    rewards: {goal: 100, bump: -5}
+    learner: {alpha: 0.2, epsilon: {start: 0.3, end: 0.02, decay_episodes: 500}}
+
+Unknown sections or keys, wrong types and out-of-range values are refused with a
+one-line :class:`~koolio_pymunk.errors.ConfigError`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import itertools
+import math
+import types
+import typing
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from .errors import ConfigError, located
+
+#: Robot profiles (paper §3): radius in inches.
+ROBOT_PROFILES: dict[str, float] = {
+    "koolio": 10.0,  # a small fridge on a round base, 20 in diameter
+    "tjpro": 17.0 / 2.54 / 2.0,  # TJ Pro: 17 cm diameter
+}
+
+
+@dataclass
+class RobotConfig:
+    profile: str = "koolio"
+    """Robot profile: ``koolio`` (20 in diameter) or ``tjpro`` (17 cm)."""
+    robot_radius: float | None = None
+    """``RobotRadius`` in inches; None takes the profile's radius."""
+
+    @property
+    def radius(self) -> float:
+        return self.robot_radius if self.robot_radius is not None else ROBOT_PROFILES[self.profile]
+
+
+@dataclass
+class ActionConfig:
+    rotate_action_arc_deg: float = 15.0
+    """``RotateActionArc`` in degrees, added (RotateLeft) or subtracted (RotateRight).
+    The paper gives no value; 15 degrees (24 steps per full turn) is this project's."""
+    move_action_distance: float = 12.0
+    """``MoveActionDistance`` in inches per Forward / Reverse. Not given by the paper;
+    half a ceiling tile. Must not exceed the robot's diameter."""
+
+
+@dataclass
+class NoiseConfig:
+    model: str = "uniform"
+    """``uniform``: reading * (1 + U(-n, +n)); ``gaussian``: reading * (1 + N(0, n/2));
+    ``none``: no noise at all. n is each sensor's own noise fraction."""
+    scale: float = 1.0
+    """Multiplies every sensor's noise fraction (0 turns noise off)."""
+
+
+@dataclass
+class SonarConfig:
+    sonar_sensors_deg: list[float] = field(
+        default_factory=lambda: [0.0, 40.0, 80.0, 135.0, 180.0, -40.0, -80.0, -135.0]
+    )
+    """``SonarSensors``: angle of each sonar relative to the front, degrees, left positive.
+    The paper gives 1&2 at 40 and 80 front-left and 5&6 at the same angles front-right;
+    0 = front, 3 = rear-left (135), 4 = rear (180) and 7 = rear-right are this project's."""
+    sonar_arc_deg: float = 55.0
+    """``SonarArc``: viewing arc of each sonar, degrees."""
+    sub_arcs: int = 11
+    """Number of smaller arcs each sonar arc is split into; one ray through each centre."""
+    max_range: float = 240.0
+    """Longest sonar ray from the robot's edge, inches; beyond it the reading is
+    ``really_long_distance`` (encodes Far). Not in the paper (its rays were lines)."""
+    noise: float = 0.10
+    """Noise fraction (paper: ten percent)."""
+    groups: list[list[int]] = field(default_factory=lambda: [[0], [1, 2], [3], [4], [5, 6], [7]])
+    """Sonars whose readings are averaged into one state value, in keyword order
+    (paper: 1&2 and 5&6 averaged, leaving 6 values)."""
+    thresholds: list[float] = field(default_factory=lambda: [6.0, 24.0, 60.0])
+    """Table 6: Bump < 6 <= Close < 24 <= Medium < 60 <= Far (inches)."""
+
+
+@dataclass
+class CameraConfig:
+    camera_sensors_deg: list[float] = field(default_factory=lambda: [0.0, 90.0, -90.0])
+    """``CameraSensors``: front, left, right (degrees relative to the front, left positive).
+    Camera 0 is the one whose Close goal reading allows the Goal reward."""
+    camera_arc_deg: float = 45.0
+    """``CameraArc``: viewing arc, degrees."""
+    max_camera_view: float = 240.0
+    """``MaxCameraView``: farthest reading a camera reports, inches (not in the paper;
+    10 ceiling tiles)."""
+    noise: float = 0.10
+    """Noise fraction (paper: ten percent)."""
+    thresholds: list[float] = field(default_factory=lambda: [36.0, 96.0])
+    """Table 7: Close < 36 <= Medium < 96 <= Far (inches); not seen encodes Far."""
+
+
+@dataclass
+class CompassConfig:
+    noise: float = 0.25
+    """Noise fraction (paper: 25 percent; why it was dropped from the state)."""
+    in_state: bool = False
+    """Add the N/E/S/W compass code to the state (the paper dropped it)."""
+
+
+@dataclass
+class SensorConfig:
+    sonar: SonarConfig = field(default_factory=SonarConfig)
+    camera: CameraConfig = field(default_factory=CameraConfig)
+    compass: CompassConfig = field(default_factory=CompassConfig)
+    noise: NoiseConfig = field(default_factory=NoiseConfig)
+    really_long_distance: float = 10_000.0
+    """``ReallyLongDistance``: the reading of a sensor that sees nothing, inches."""
+    backend: str = "pymunk"
+    """Ray engine: ``pymunk`` (segment queries, the reference)."""
+
+
+@dataclass
+class RewardConfig:
+    """Reward values; the first that applies wins (paper §5.4.7). The paper gives none."""
+
+    goal: float = 100.0
+    """The action was Stop and the front camera reads the goal Close."""
+    end_of_world: float = -100.0
+    """The robot's centre entered an end-of-world zone."""
+    bump: float = -10.0
+    """Any sonar reads Bump."""
+    stop: float = -2.0
+    """Stop anywhere else."""
+    reverse: float = -2.0
+    turn: float = -1.0
+    """RotateLeft or RotateRight."""
+    forward: float = -1.0
+
+
+@dataclass
+class RescueConfig:
+    auto_rescue_toggle: bool = True
+    """``Auto_Rescue_Toggle``."""
+    max_steps_before_rescue: int = 200
+    """``MaxStepsBeforeRescue``: auto rescue only after this many steps of an episode."""
+    rescue_chance: float = 0.1
+    """``Rescue_Chance``: probability of a rescue on a Bump step past the limit."""
+    rescue_max_backup: int = 5
+    """``Rescue_Max_Backup``: a rescue backs up 0..this many Reverse moves."""
+
+
+@dataclass
+class EpisodeConfig:
+    max_steps: int = 1500
+    """Step cap; reaching it truncates the episode (not a failure). 0 = no cap."""
+    clockless_loop_count: int = 100
+    """``Clockless_Loop_Count``: steps per timer tick in clockless mode (viewer)."""
+
+
+@dataclass
+class EpsilonSchedule:
+    start: float = 0.2
+    """Epsilon of the first episode."""
+    end: float = 0.02
+    """Epsilon after ``decay_episodes`` episodes and from then on."""
+    decay_episodes: int = 400
+    """Episodes of linear decay from start to end (0 = constant ``start``)."""
+
+    def at(self, episode: int) -> float:
+        """Epsilon for ``episode`` (0-based)."""
+        if self.decay_episodes <= 0 or episode >= self.decay_episodes:
+            return self.end if self.decay_episodes > 0 else self.start
+        return self.start + (self.end - self.start) * episode / self.decay_episodes
+
+
+@dataclass
+class LearnerConfig:
+    alpha: float = 0.2
+    """Learning rate of the Table 11 update."""
+    gamma: float = 0.97
+    """Discount factor."""
+    epsilon: EpsilonSchedule = field(default_factory=EpsilonSchedule)
+    """Exploration: probability of a uniform random action."""
+    q_init: float = 0.0
+    """Value of a Q entry never visited."""
+
+
+@dataclass
+class Config:
+    """The whole configuration (printed at the start of every command)."""
+
+    robot: RobotConfig = field(default_factory=RobotConfig)
+    actions: ActionConfig = field(default_factory=ActionConfig)
+    sensors: SensorConfig = field(default_factory=SensorConfig)
+    rewards: RewardConfig = field(default_factory=RewardConfig)
+    rescue: RescueConfig = field(default_factory=RescueConfig)
+    episode: EpisodeConfig = field(default_factory=EpisodeConfig)
+    learner: LearnerConfig = field(default_factory=LearnerConfig)
+
+    def validate(self, source: str = "<config>") -> Config:
+        """Check ranges; raise ConfigError naming the item. Returns self."""
+        _validate(self, source)
+        return self
+
+    def to_dict(self) -> dict[str, Any]:
+        return dataclasses.asdict(self)
+
+    def to_yaml(self) -> str:
+        return yaml.safe_dump(self.to_dict(), sort_keys=False, default_flow_style=None)
+
+
+def load_config(path: str | Path | None = None, overrides: dict | None = None) -> Config:
+    """Defaults, then the YAML file at ``path`` (if any), then ``overrides``; validated."""
+    cfg = Config()
+    source = "<defaults>"
+    if path is not None:
+        source = str(path)
+        try:
+            text = Path(path).read_text(encoding="utf-8")
+        except OSError as exc:
+            raise ConfigError(located(source, "", f"cannot read: {exc.strerror}")) from None
+        try:
+            data = yaml.safe_load(text)
+        except yaml.YAMLError as exc:
+            mark = getattr(exc, "problem_mark", None)
+            where = f"line {mark.line + 1}" if mark else ""
+            raise ConfigError(located(source, where, "not valid YAML")) from None
+        if data is None:
+            data = {}
+        cfg = _merge(cfg, data, source, "")
+    if overrides:
+        cfg = _merge(cfg, overrides, source, "")
+    return cfg.validate(source)
+
+
+def config_from_dict(data: dict, source: str = "<config>") -> Config:
+    """A validated Config from a nested mapping (e.g. ``Config().to_dict()``)."""
+    return _merge(Config(), data, source, "").validate(source)
+
+
+# --- merging ------------------------------------------------------------------------
+
+
+def _merge(obj: Any, data: Any, source: str, path: str) -> Any:
+    if not isinstance(data, dict):
+        raise ConfigError(located(source, path or "(top level)", "must be a mapping"))
+    hints = typing.get_type_hints(type(obj))
+    names = [f.name for f in dataclasses.fields(obj)]
+    changes: dict[str, Any] = {}
+    for key, value in data.items():
+        item = f"{path}.{key}" if path else str(key)
+        if key not in names:
+            close = difflib.get_close_matches(str(key), names, n=1)
+            hint = f" (did you mean '{close[0]}'?)" if close else f" (valid: {', '.join(names)})"
+            raise ConfigError(located(source, item, "unknown key" + hint))
+        current = getattr(obj, key)
+        if dataclasses.is_dataclass(current):
+            changes[key] = _merge(current, value, source, item)
+        else:
+            changes[key] = _coerce(value, hints[key], source, item)
+    return dataclasses.replace(obj, **changes)
+
+
+def _coerce(value: Any, hint: Any, source: str, item: str) -> Any:
+    origin = typing.get_origin(hint)
+    args = typing.get_args(hint)
+    if origin in (typing.Union, types.UnionType):
+        if value is None and type(None) in args:
+            return None
+        inner = [a for a in args if a is not type(None)]
+        return _coerce(value, inner[0], source, item)
+    if hint is bool:
+        if not isinstance(value, bool):
+            raise ConfigError(located(source, item, f"expected true or false, got {value!r}"))
+        return value
+    if hint in (int, float):
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ConfigError(located(source, item, f"expected a number, got {value!r}"))
+        if hint is int and not float(value).is_integer():
+            raise ConfigError(located(source, item, f"expected an integer, got {value!r}"))
+        if not math.isfinite(value):
+            raise ConfigError(located(source, item, f"must be finite, got {value!r}"))
+        return hint(value)
+    if hint is str:
+        if not isinstance(value, str):
+            raise ConfigError(located(source, item, f"expected a string, got {value!r}"))
+        return value
+    if origin is list:
+        if not isinstance(value, list):
+            raise ConfigError(located(source, item, f"expected a list, got {value!r}"))
+        return [_coerce(v, args[0], source, f"{item}[{i}]") for i, v in enumerate(value)]
+    return value
+
+
+# --- validation -----------------------------------------------------------------------
+
+
+def _check(ok: bool, source: str, item: str, problem: str) -> None:
+    if not ok:
+        raise ConfigError(located(source, item, problem))
+
+
+def _validate(cfg: Config, src: str) -> None:
+    _check(
+        cfg.robot.profile in ROBOT_PROFILES,
+        src,
+        "robot.profile",
+        f"unknown profile {cfg.robot.profile!r} (valid: {', '.join(ROBOT_PROFILES)})",
+    )
+    _check(cfg.robot.radius > 0, src, "robot.robot_radius", "must be > 0")
+    a = cfg.actions
+    _check(
+        0 < a.rotate_action_arc_deg < 360,
+        src,
+        "actions.rotate_action_arc_deg",
+        "must be in (0, 360)",
+    )
+    _check(
+        0 < a.move_action_distance <= 2 * cfg.robot.radius,
+        src,
+        "actions.move_action_distance",
+        f"must be in (0, robot diameter {2 * cfg.robot.radius:g}]",
+    )
+    s = cfg.sensors
+    _check(
+        s.noise.model in ("uniform", "gaussian", "none"),
+        src,
+        "sensors.noise.model",
+        f"unknown model {s.noise.model!r} (valid: uniform, gaussian, none)",
+    )
+    _check(s.noise.scale >= 0, src, "sensors.noise.scale", "must be >= 0")
+    _check(
+        s.backend in ("pymunk",),
+        src,
+        "sensors.backend",
+        f"unknown backend {s.backend!r} (valid: pymunk)",
+    )
+    so = s.sonar
+    _check(len(so.sonar_sensors_deg) >= 1, src, "sensors.sonar.sonar_sensors_deg", "empty")
+    _check(0 < so.sonar_arc_deg < 360, src, "sensors.sonar.sonar_arc_deg", "must be in (0, 360)")
+    _check(so.sub_arcs >= 1, src, "sensors.sonar.sub_arcs", "must be >= 1")
+    _check(so.max_range > 0, src, "sensors.sonar.max_range", "must be > 0")
+    _check(0 <= so.noise < 1, src, "sensors.sonar.noise", "must be in [0, 1)")
+    _check(
+        _increasing(so.thresholds) and len(so.thresholds) >= 1,
+        src,
+        "sensors.sonar.thresholds",
+        "must be increasing and non-empty",
+    )
+    used: list[int] = [i for g in so.groups for i in g]
+    _check(
+        len(so.groups) >= 1 and all(len(g) >= 1 for g in so.groups),
+        src,
+        "sensors.sonar.groups",
+        "need at least one non-empty group",
+    )
+    for i in used:
+        _check(
+            0 <= i < len(so.sonar_sensors_deg),
+            src,
+            "sensors.sonar.groups",
+            f"sonar {i} does not exist (there are {len(so.sonar_sensors_deg)})",
+        )
+    _check(len(set(used)) == len(used), src, "sensors.sonar.groups", "a sonar is in two groups")
+    ca = s.camera
+    _check(len(ca.camera_sensors_deg) >= 1, src, "sensors.camera.camera_sensors_deg", "empty")
+    _check(0 < ca.camera_arc_deg < 360, src, "sensors.camera.camera_arc_deg", "must be in (0, 360)")
+    _check(ca.max_camera_view > 0, src, "sensors.camera.max_camera_view", "must be > 0")
+    _check(0 <= ca.noise < 1, src, "sensors.camera.noise", "must be in [0, 1)")
+    _check(
+        _increasing(ca.thresholds) and len(ca.thresholds) >= 1,
+        src,
+        "sensors.camera.thresholds",
+        "must be increasing and non-empty",
+    )
+    _check(0 <= s.compass.noise < 1, src, "sensors.compass.noise", "must be in [0, 1)")
+    _check(
+        s.really_long_distance > max(so.max_range, ca.max_camera_view),
+        src,
+        "sensors.really_long_distance",
+        "must exceed max_range and max_camera_view",
+    )
+    r = cfg.rescue
+    _check(r.max_steps_before_rescue >= 0, src, "rescue.max_steps_before_rescue", "must be >= 0")
+    _check(0 <= r.rescue_chance <= 1, src, "rescue.rescue_chance", "must be in [0, 1]")
+    _check(r.rescue_max_backup >= 0, src, "rescue.rescue_max_backup", "must be >= 0")
+    _check(cfg.episode.max_steps >= 0, src, "episode.max_steps", "must be >= 0 (0 = no cap)")
+    _check(
+        cfg.episode.clockless_loop_count >= 1, src, "episode.clockless_loop_count", "must be >= 1"
+    )
+    le = cfg.learner
+    _check(0 < le.alpha <= 1, src, "learner.alpha", "must be in (0, 1]")
+    _check(0 <= le.gamma <= 1, src, "learner.gamma", "must be in [0, 1]")
+    for name in ("start", "end"):
+        _check(
+            0 <= getattr(le.epsilon, name) <= 1, src, f"learner.epsilon.{name}", "must be in [0, 1]"
+        )
+    _check(le.epsilon.decay_episodes >= 0, src, "learner.epsilon.decay_episodes", "must be >= 0")
+
+
+def _increasing(xs: list[float]) -> bool:
+    return all(b > a for a, b in itertools.pairwise(xs))

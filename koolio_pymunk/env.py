@@ -1,0 +1,259 @@
+"""``KoolioEnv``: the paper's delivery task as a Gymnasium environment."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from .arena import Arena, Point, load_arena
+from .config import Config, load_config
+from .errors import ConfigError
+from .geometry import point_in_polygon
+from .qtable import KeywordLayout
+from .rescue import rescue_robot, wants_rescue
+from .rules import TERMS, Judgement, judge
+from .sensors import Readings, SensorSuite
+from .world import ACTION_NAMES, World
+
+
+class EndZones:
+    """End-of-world zones: polygons, or discs of one robot diameter around a marker."""
+
+    def __init__(self, arena: Arena, radius: float) -> None:
+        self.polygons = [m.zone for m in arena.end_of_world if m.zone is not None]
+        self.discs = [m.at for m in arena.end_of_world if m.zone is None]
+        self.disc_radius = 2.0 * radius
+
+    def contains(self, x: float, y: float) -> bool:
+        for cx, cy in self.discs:
+            if math.hypot(x - cx, y - cy) <= self.disc_radius:
+                return True
+        return any(point_in_polygon((x, y), poly) for poly in self.polygons)
+
+
+class KoolioEnv(gym.Env):
+    """Koolio, a round delivery robot, must stop in front of an office door's number plate.
+
+    **Arena.** A YAML arena (``arenas/hallway.yaml`` by default: the paper's 1632 x 88 in
+    hallway): walls, optional obstacles, named goals (one active), end-of-world markers
+    with zones, a start point. Units are inches.
+
+    **Action space** ``Discrete(5)``: 0 Stop, 1 RotateLeft (+``rotate_action_arc_deg``),
+    2 RotateRight, 3 Forward, 4 Reverse (``move_action_distance``). pymunk resolves every
+    move against the walls.
+
+    **Observation space** ``MultiDiscrete``: the encoded readings in keyword order. With
+    the paper's sensors, 12 values: goal distance seen by the front, left and right cameras
+    and end-of-world distance seen by the same three (0 Close < 36 in, 1 Medium < 96,
+    2 Far or not seen), then six sonar values (sonars 0, 1&2 averaged, 3, 4, 5&6
+    averaged, 7; 0 Bump < 6 in, 1 Close < 24, 2 Medium < 60, 3 Far).
+
+    **Rewards** (first that applies, values in ``Config.rewards``): goal (Stop with the
+    front camera reading the goal Close) > end_of_world > bump (any sonar Bump) > stop /
+    reverse / turn / forward by action. ``info["reward_terms"]`` names them.
+
+    **Episode end.** ``terminated`` at the goal or in an end-of-world zone; ``truncated``
+    after ``episode.max_steps`` steps. Each episode starts at the arena's start point with
+    a uniformly random heading unless the arena fixes it (exploring starts).
+
+    **Rescue.** With ``rescue.auto_rescue_toggle`` on, a bumping robot past
+    ``max_steps_before_rescue`` steps is rescued with probability ``rescue_chance``
+    (random reverses, random spin); the observation returned is the one after the rescue
+    and the step's reward stays the Bump reward. :meth:`rescue` forces one.
+
+    **info**: ``pose`` (x, y, heading radians), ``sonar`` / ``goal_cam`` / ``eow_cam``
+    (noised distances, inches), ``compass``, ``state_key``, ``keyword`` (Table 12 keyword
+    of the previous state and this action: the Q entry the step updates), ``event``,
+    ``rescued``, ``has_been_rescued``, ``reward_terms``, ``steps``, ``bumps``, ``goal``.
+
+    All randomness (start headings, sensor noise, rescues) comes from ``self.np_random``,
+    seeded by ``reset(seed=...)``.
+    """
+
+    metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 30}
+
+    def __init__(
+        self,
+        arena: str | Path | Arena = "hallway",
+        config: Config | str | Path | None = None,
+        goal: str | None = None,
+        render_mode: str | None = None,
+        max_steps: int | None = None,
+    ) -> None:
+        self.config = config if isinstance(config, Config) else load_config(config)
+        if max_steps is not None:
+            self.config.episode.max_steps = int(max_steps)
+        radius = self.config.robot.radius
+        self.arena = arena if isinstance(arena, Arena) else load_arena(arena, radius)
+        if goal is not None and goal != "random":
+            if goal not in self.arena.goal_names():
+                raise ConfigError(
+                    f"{self.arena.source}: goal: no goal named {goal!r} "
+                    f"(goals: {', '.join(self.arena.goal_names())})"
+                )
+            self.arena = self.arena.with_active_goal(goal)
+        self.random_goal = goal == "random"
+        self.world_arena = self.arena.to_world()
+        self.world = World.from_arena(self.arena, radius)
+        self.zones = EndZones(self.world_arena, radius)
+        self.sensors = SensorSuite(
+            self.config.sensors,
+            self.world,
+            self.world_arena.goal().at,
+            [m.at for m in self.world_arena.end_of_world],
+        )
+        self.layout = KeywordLayout(tuple(self.sensors.levels))
+        self.action_space = spaces.Discrete(len(ACTION_NAMES))
+        self.observation_space = spaces.MultiDiscrete([lv for _, lv in self.sensors.levels])
+        self.render_mode = render_mode
+        self._renderer: Any = None
+        self._arc = math.radians(self.config.actions.rotate_action_arc_deg)
+        self._distance = self.config.actions.move_action_distance
+        self.goal_name = self.world_arena.active_goal
+        self._reset_counters()
+
+    # -- Gymnasium API ---------------------------------------------------------------
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Start an episode; ``options`` may hold ``goal`` (a goal name) or ``heading``."""
+        super().reset(seed=seed)
+        self.reset_key(options)
+        return self._obs(), self._info()
+
+    def step(self, action: int) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        _, reward, terminated, truncated = self.transition(int(action))
+        return self._obs(), reward, terminated, truncated, self._info()
+
+    def render(self) -> np.ndarray | None:
+        if self.render_mode is None:
+            gym.logger.warn("render() called without a render_mode")
+            return None
+        if self._renderer is None:
+            from .viewer.render import EnvRenderer  # pygame only when drawing
+
+            self._renderer = EnvRenderer(self)
+        return self._renderer.render(self.render_mode)
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+    # -- fast path (used by the learner; no observation array, no info dict) ----------
+    def reset_key(self, options: dict[str, Any] | None = None) -> int:
+        """Reset without building obs/info; returns the state key. Call ``reset`` first
+        once (or seed ``np_random``) to own a seeded generator."""
+        options = options or {}
+        rng = self.np_random
+        goal = options.get("goal")
+        if goal is None and self.random_goal:
+            names = self.world_arena.goal_names()
+            goal = names[int(rng.integers(len(names)))]
+        if goal is not None:
+            self.set_goal(goal)
+        start = self.world_arena.start
+        heading = options.get("heading")
+        if heading is None:
+            heading = (
+                math.radians(start.heading_deg)
+                if start.heading_deg is not None
+                else float(rng.uniform(0.0, 2.0 * math.pi))
+            )
+        self.world.place(0, start.at, float(heading))
+        self._reset_counters()
+        self._sense()
+        return self.state_key
+
+    def transition(self, action: int) -> tuple[int, float, bool, bool]:
+        """Simulate -> observe -> reward -> terminated -> truncated (then maybe rescue).
+
+        Returns ``(state_key, reward, terminated, truncated)``.
+        """
+        prev_key = self.state_key
+        self.world.act((action,), self._distance, self._arc)
+        r = self._sense()
+        x, y, _ = self.world.pose(0)
+        bump = self.sensors.bump(r)
+        j = judge(
+            action, self.sensors.goal_close(r), self.zones.contains(x, y), bump, self.config.rewards
+        )
+        self.steps += 1
+        self.bumps += int(bump)
+        self.episode_reward += j.reward
+        self.judgement = j
+        self.last_action = action
+        self.keyword = (prev_key << self.layout.action_bits) | action
+        self.rescued = False
+        if not j.terminated and wants_rescue(self.config.rescue, self.steps, bump, self.np_random):
+            self._rescue()
+        cap = self.config.episode.max_steps
+        truncated = not j.terminated and cap > 0 and self.steps >= cap
+        return self.state_key, j.reward, j.terminated, truncated
+
+    def rescue(self) -> tuple[np.ndarray, dict[str, Any]]:
+        """Force ``Rescue_Robot`` now (the viewer's Rescue button)."""
+        self._rescue()
+        return self._obs(), self._info()
+
+    # -- internals ---------------------------------------------------------------------
+    def set_goal(self, name: str) -> None:
+        """Make ``name`` the active goal (the cameras see only its plate)."""
+        self.world_arena = self.world_arena.with_active_goal(name)
+        self.sensors.set_goal(self.world_arena.goal().at)
+        self.goal_name = name
+
+    def _rescue(self) -> None:
+        rescue_robot(self.world, 0, self.config.rescue, self._distance, self.np_random)
+        self._sense()
+        self.rescued = True
+        self.has_been_rescued = True
+
+    def _reset_counters(self) -> None:
+        self.steps = 0
+        self.bumps = 0
+        self.episode_reward = 0.0
+        self.has_been_rescued = False
+        self.rescued = False
+        self.judgement: Judgement | None = None
+        self.last_action: int | None = None
+        self.keyword: int | None = None
+
+    def _sense(self) -> Readings:
+        self.readings = self.sensors.read(self.world.pose(0), self.np_random)
+        self.codes = self.sensors.encode(self.readings)
+        self.state_key = self.layout.state_key(self.codes)
+        return self.readings
+
+    def _obs(self) -> np.ndarray:
+        return np.array(self.codes, dtype=np.int64)
+
+    def _info(self) -> dict[str, Any]:
+        r = self.readings
+        j = self.judgement
+        return {
+            "pose": self.world.pose(0),
+            "sonar": r.sonar.tolist(),
+            "goal_cam": r.goal.tolist(),
+            "eow_cam": r.eow.tolist(),
+            "compass": r.compass,
+            "state_key": self.state_key,
+            "keyword": self.keyword,
+            "event": None if j is None else j.event,
+            "rescued": self.rescued,
+            "has_been_rescued": self.has_been_rescued,
+            "reward_terms": dict(j.terms) if j is not None else dict.fromkeys(TERMS, 0.0),
+            "steps": self.steps,
+            "bumps": self.bumps,
+            "goal": self.goal_name,
+        }
+
+    @property
+    def robot_location(self) -> Point:
+        x, y, _ = self.world.pose(0)
+        return (x, y)

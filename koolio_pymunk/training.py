@@ -1,0 +1,312 @@
+"""Headless training and greedy evaluation loops, the per-episode log, and seeding.
+
+**Seeding.** Episode ``e`` of a run with seed ``s`` resets the environment with a seed
+derived from ``(s, e)`` and gives the learner a generator derived from ``(s, e, 1)``.
+The same seed and configuration therefore give byte-identical Q-table files and logs,
+and a run resumed from its table file continues exactly as an uninterrupted one would
+(as long as no episode was interrupted).
+
+**Log.** One CSV row per finished (or interrupted) episode, appended and flushed::
+
+    episode,reward,steps,bumps,outcome,rescued,epsilon,goal
+
+``outcome`` is ``goal``, ``end_of_world``, ``truncated`` (step cap) or ``interrupted``
+(Ctrl-C / Exit: the unfinished episode was folded into the table).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .config import Config
+from .env import KoolioEnv
+from .learner import QLearner
+from .qtable import QTable, QTableStore, load_qtable
+
+LOG_FIELDS = ("episode", "reward", "steps", "bumps", "outcome", "rescued", "epsilon", "goal")
+
+
+def episode_seeds(seed: int, episode: int) -> tuple[int, np.random.Generator]:
+    """The environment seed and the learner's generator for ``episode`` of run ``seed``."""
+    env_seed = int(np.random.SeedSequence([seed, episode]).generate_state(1)[0])
+    return env_seed, np.random.default_rng([seed, episode, 1])
+
+
+def sensor_signature(cfg: Config) -> dict[str, Any]:
+    """What a Q-table depends on: the sensor layout (noise settings excluded)."""
+    s = cfg.sensors
+    so, ca = s.sonar, s.camera
+    return {
+        "sonar_sensors_deg": list(so.sonar_sensors_deg),
+        "sonar_arc_deg": so.sonar_arc_deg,
+        "sub_arcs": so.sub_arcs,
+        "sonar_max_range": so.max_range,
+        "sonar_groups": [list(g) for g in so.groups],
+        "sonar_thresholds": list(so.thresholds),
+        "camera_sensors_deg": list(ca.camera_sensors_deg),
+        "camera_arc_deg": ca.camera_arc_deg,
+        "max_camera_view": ca.max_camera_view,
+        "camera_thresholds": list(ca.thresholds),
+        "compass_in_state": s.compass.in_state,
+    }
+
+
+@dataclass
+class EpisodeResult:
+    episode: int
+    reward: float
+    steps: int
+    bumps: int
+    outcome: str
+    rescued: bool
+    epsilon: float
+    goal: str
+
+    def row(self) -> list[str]:
+        return [
+            str(self.episode),
+            f"{self.reward:.6g}",
+            str(self.steps),
+            str(self.bumps),
+            self.outcome,
+            str(int(self.rescued)),
+            f"{self.epsilon:.6g}",
+            self.goal,
+        ]
+
+
+def run_episode(
+    env: KoolioEnv,
+    agent: QLearner,
+    learn: bool,
+    stop: Callable[[], bool] | None = None,
+) -> tuple[float, int, str]:
+    """Run one episode from a reset env; returns ``(reward, steps, outcome)``."""
+    state = env.state_key
+    while True:
+        action = agent.act(state)
+        nxt, reward, terminated, truncated = env.transition(action)
+        if learn:
+            agent.update(state, action, reward, nxt, terminated)
+        state = nxt
+        if terminated:
+            return env.episode_reward, env.steps, env.judgement.event  # type: ignore[union-attr]
+        if truncated:
+            return env.episode_reward, env.steps, "truncated"
+        if stop is not None and stop():
+            return env.episode_reward, env.steps, "interrupted"
+
+
+class LogWriter:
+    """Appends CSV rows to the log (header once), flushing every row."""
+
+    def __init__(self, path: str | Path | None) -> None:
+        self.path = Path(path) if path else None
+        self._fh: io.TextIOBase | None = None
+        if self.path is not None:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            new = not self.path.exists() or self.path.stat().st_size == 0
+            self._fh = open(self.path, "a", newline="", encoding="utf-8")  # noqa: SIM115
+            if new:
+                self._write(list(LOG_FIELDS))
+
+    def _write(self, row: list[str]) -> None:
+        buf = io.StringIO()
+        csv.writer(buf, lineterminator="\n").writerow(row)
+        assert self._fh is not None
+        self._fh.write(buf.getvalue())
+        self._fh.flush()
+
+    def write(self, result: EpisodeResult) -> None:
+        if self._fh is not None:
+            self._write(result.row())
+
+    def close(self) -> None:
+        if self._fh is not None:
+            self._fh.close()
+            self._fh = None
+
+
+@dataclass
+class Progress:
+    """Running figures of a training run, printed as progress lines."""
+
+    window: int = 100
+    recent: deque = field(default_factory=lambda: deque(maxlen=100))
+    episodes: int = 0
+    goals: int = 0
+    steps: int = 0
+    started: float = field(default_factory=time.perf_counter)
+
+    def add(self, r: EpisodeResult) -> None:
+        self.episodes += 1
+        self.goals += r.outcome == "goal"
+        self.steps += r.steps
+        self.recent.append(r.outcome == "goal")
+
+    @property
+    def goal_rate(self) -> float:
+        return sum(self.recent) / len(self.recent) if self.recent else 0.0
+
+    @property
+    def steps_per_s(self) -> float:
+        return self.steps / max(1e-9, time.perf_counter() - self.started)
+
+    def line(self, episode: int, total: int, epsilon: float) -> str:
+        return (
+            f"episode {episode:>6}/{total}  goal rate (last {len(self.recent)}) "
+            f"{self.goal_rate:6.1%}  steps/s {self.steps_per_s:8.0f}  epsilon {epsilon:.3f}"
+        )
+
+
+@dataclass
+class TrainResult:
+    table: QTable
+    episodes_run: int
+    goals: int
+    steps: int
+    seconds: float
+    interrupted: bool
+    results: list[EpisodeResult]
+
+
+def train(
+    env: KoolioEnv,
+    store: QTableStore,
+    episodes: int,
+    seed: int,
+    log_path: str | Path | None = None,
+    discard_unfinished: bool = False,
+    report: Callable[[str], None] | None = print,
+    report_every: float = 1.0,
+) -> TrainResult:
+    """Train for ``episodes`` more episodes, saving the table after each one.
+
+    Ctrl-C (KeyboardInterrupt) is the paper's Exit: the unfinished episode's updates are
+    kept and the table saved; with ``discard_unfinished`` it is Exit Without Save: the
+    table file stays as it was after the last finished episode.
+    """
+    cfg = env.config
+    table = store.open(env.layout, sensor_signature(cfg), cfg.learner.q_init)
+    first = int(table.meta.get("episodes", 0))
+    log = LogWriter(log_path)
+    progress = Progress()
+    results: list[EpisodeResult] = []
+    agent = QLearner(table, cfg.learner, np.random.default_rng(seed))
+    last_report = time.perf_counter()
+    interrupted = False
+    try:
+        for e in range(first, first + episodes):
+            env_seed, agent.rng = episode_seeds(seed, e)
+            agent.set_episode(e)
+            env.reset(seed=env_seed)
+            reward, steps, outcome = run_episode(env, agent, learn=True)
+            res = EpisodeResult(
+                e,
+                reward,
+                steps,
+                env.bumps,
+                outcome,
+                env.has_been_rescued,
+                agent.epsilon,
+                env.goal_name,
+            )
+            table.meta["episodes"] = e + 1
+            store.save(table)
+            log.write(res)
+            results.append(res)
+            progress.add(res)
+            now = time.perf_counter()
+            if report and (now - last_report >= report_every or e == first + episodes - 1):
+                report(progress.line(e + 1, first + episodes, agent.epsilon))
+                last_report = now
+    except KeyboardInterrupt:
+        interrupted = True
+        if discard_unfinished:
+            # Nothing to do: the file still holds the table of the last finished episode.
+            table = load_qtable(store.path)
+            if report:
+                report("interrupted: unfinished episode discarded (Exit Without Save)")
+        else:
+            res = EpisodeResult(
+                table.meta.get("episodes", first),
+                env.episode_reward,
+                env.steps,
+                env.bumps,
+                "interrupted",
+                env.has_been_rescued,
+                agent.epsilon,
+                env.goal_name,
+            )
+            store.save(table)
+            log.write(res)
+            results.append(res)
+            if report:
+                report("interrupted: unfinished episode folded into the Q-table and saved (Exit)")
+    finally:
+        log.close()
+    return TrainResult(
+        table,
+        progress.episodes,
+        progress.goals,
+        progress.steps,
+        time.perf_counter() - progress.started,
+        interrupted,
+        results,
+    )
+
+
+@dataclass
+class EvalResult:
+    episodes: int
+    goal_rate: float
+    end_of_world_rate: float
+    truncated_rate: float
+    mean_steps: float
+    mean_bumps: float
+    mean_reward: float
+    goal: str
+
+    def as_dict(self) -> dict[str, Any]:
+        return dict(self.__dict__)
+
+
+def evaluate(
+    env: KoolioEnv, table: QTable, episodes: int, seed: int, goal: str | None = None
+) -> EvalResult:
+    """Greedy policy (epsilon 0, no updates), random start headings, ``episodes`` runs."""
+    agent = QLearner(table, env.config.learner, np.random.default_rng(seed))
+    agent.epsilon = 0.0
+    outcomes: list[str] = []
+    steps: list[int] = []
+    bumps: list[int] = []
+    rewards: list[float] = []
+    options = {"goal": goal} if goal else None
+    for e in range(episodes):
+        env_seed, agent.rng = episode_seeds(seed, e)
+        env.reset(seed=env_seed, options=options)
+        reward, n, outcome = run_episode(env, agent, learn=False)
+        outcomes.append(outcome)
+        steps.append(n)
+        bumps.append(env.bumps)
+        rewards.append(reward)
+    n = max(1, episodes)
+    return EvalResult(
+        episodes=episodes,
+        goal_rate=outcomes.count("goal") / n,
+        end_of_world_rate=outcomes.count("end_of_world") / n,
+        truncated_rate=outcomes.count("truncated") / n,
+        mean_steps=float(np.mean(steps)) if steps else 0.0,
+        mean_bumps=float(np.mean(bumps)) if bumps else 0.0,
+        mean_reward=float(np.mean(rewards)) if rewards else 0.0,
+        goal=env.goal_name,
+    )

@@ -1,0 +1,196 @@
+"""The pymunk world: static wall segments and the robot's circle body (paper §5.4.2, §5.4.4).
+
+Design (see ``shared/notes/pymunk-facts.md``): a kinematic body gets no collision response
+from static walls, so the robot is a **dynamic** circle body, with infinite moment (contacts
+never spin it) and zero friction (it slides along walls). A move of ``d`` inches sets the
+body's velocity once to ``d`` per unit time and steps the space for one time unit in
+sub-steps that move the robot at most ``radius / 4`` each, with ``collision_bias = 0`` and
+``collision_slop = 0.01``: pymunk's contact solver removes the velocity into walls, so the
+robot stops at (or slides along) a wall, never overlapping it by more than the slop and
+never tunnelling. Contacts are found after positions are integrated, so the last sub-step
+can leave an overlap; two zero-velocity settle steps (bias 0 = remove all overlap beyond
+the slop in one step) push it out. The velocity is then zeroed: a move is an action, not
+momentum.
+Rotations set the heading directly (a circle's contacts do not depend on it).
+
+Several robots may share the world (``n_robots``): each is its own circle in the same
+space but in one non-colliding shape group, so each lives in its own copy of the arena.
+
+Example::
+
+    >>> from koolio_pymunk.world import World, Action
+    >>> w = World.from_segments([((0, 0), (100, 0)), ((100, 0), (100, 100)),
+    ...                          ((100, 100), (0, 100)), ((0, 100), (0, 0))], radius=10)
+    >>> w.place(0, (50, 50), 0.0)
+    >>> w.act([Action.FORWARD], distance=12, arc=0.1)
+    >>> round(w.x[0], 6), round(w.y[0], 6)
+    (62.0, 50.0)
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from enum import IntEnum
+
+import pymunk
+
+from .arena import Arena, Point
+
+#: Collision categories (bit masks) for shape filters.
+WALL_CATEGORY = 0b01
+ROBOT_CATEGORY = 0b10
+#: Filter for sensor rays: walls only (never the robot's own circle).
+WALL_ONLY = pymunk.ShapeFilter(mask=WALL_CATEGORY)
+#: Non-zero group shared by all robots: shapes in one group never collide.
+ROBOT_GROUP = 1
+#: pymunk's allowed overlap: the most a robot may sink into a wall, inches.
+COLLISION_SLOP = 0.01
+TWO_PI = 2.0 * math.pi
+#: Zero-velocity steps after each move that push out the last sub-step's overlap.
+SETTLE_STEPS = 2
+
+
+class Action(IntEnum):
+    """The paper's five actions (the low 3 bits of the Q keyword)."""
+
+    STOP = 0
+    ROTATE_LEFT = 1
+    ROTATE_RIGHT = 2
+    FORWARD = 3
+    REVERSE = 4
+
+
+ACTION_NAMES = ("Stop", "RotateLeft", "RotateRight", "Forward", "Reverse")
+
+
+class World:
+    """Walls as static segments and ``n_robots`` circle bodies in one pymunk space."""
+
+    def __init__(
+        self, segments: Sequence[tuple[Point, Point]], radius: float, n_robots: int = 1
+    ) -> None:
+        self.radius = float(radius)
+        self.segments = [(tuple(map(float, a)), tuple(map(float, b))) for a, b in segments]
+        self.space = pymunk.Space()
+        self.space.collision_bias = 0.0
+        self.space.collision_slop = COLLISION_SLOP
+        self.space.iterations = 20
+        self.walls: list[pymunk.Segment] = []
+        for a, b in self.segments:
+            seg = pymunk.Segment(self.space.static_body, a, b, 0.0)
+            seg.friction = 0.0
+            seg.elasticity = 0.0
+            seg.filter = pymunk.ShapeFilter(categories=WALL_CATEGORY)
+            self.walls.append(seg)
+        self.space.add(*self.walls)
+        self.bodies: list[pymunk.Body] = []
+        self.shapes: list[pymunk.Circle] = []
+        for _ in range(n_robots):
+            self._add_robot()
+        self.heading = [0.0] * n_robots
+
+    @classmethod
+    def from_arena(cls, arena: Arena, radius: float, n_robots: int = 1) -> World:
+        """A world holding ``arena``'s walls and obstacles (``rotate_deg`` applied)."""
+        return cls(arena.to_world().segments(), radius, n_robots)
+
+    @classmethod
+    def from_segments(
+        cls, segments: Sequence[tuple[Point, Point]], radius: float, n_robots: int = 1
+    ) -> World:
+        return cls(segments, radius, n_robots)
+
+    def _add_robot(self) -> None:
+        body = pymunk.Body(1.0, math.inf)
+        shape = pymunk.Circle(body, self.radius)
+        shape.friction = 0.0
+        shape.elasticity = 0.0
+        shape.filter = pymunk.ShapeFilter(
+            group=ROBOT_GROUP, categories=ROBOT_CATEGORY, mask=WALL_CATEGORY
+        )
+        self.space.add(body, shape)
+        self.bodies.append(body)
+        self.shapes.append(shape)
+
+    # -- state ----------------------------------------------------------------------
+    @property
+    def n_robots(self) -> int:
+        return len(self.bodies)
+
+    @property
+    def x(self) -> list[float]:
+        return [b.position.x for b in self.bodies]
+
+    @property
+    def y(self) -> list[float]:
+        return [b.position.y for b in self.bodies]
+
+    def pose(self, i: int = 0) -> tuple[float, float, float]:
+        """``(RobotLocation x, y, RobotOrientation)`` of robot ``i``; heading in [0, 2pi)."""
+        p = self.bodies[i].position
+        return (p.x, p.y, self.heading[i])
+
+    def place(self, i: int, at: Point, heading: float) -> None:
+        """Put robot ``i`` at ``at`` with ``heading`` (radians), at rest."""
+        body = self.bodies[i]
+        body.position = (float(at[0]), float(at[1]))
+        body.velocity = (0.0, 0.0)
+        self.heading[i] = heading % TWO_PI
+        self.space.reindex_shapes_for_body(body)
+
+    # -- actions --------------------------------------------------------------------
+    def act(self, actions: Sequence[int], distance: float, arc: float) -> None:
+        """Perform one action per robot: rotations by ``arc`` radians, moves by ``distance``.
+
+        All moving robots move together through the same pymunk sub-steps.
+        """
+        moving = False
+        for i, action in enumerate(actions):
+            if action == Action.ROTATE_LEFT:
+                self.heading[i] = (self.heading[i] + arc) % TWO_PI
+            elif action == Action.ROTATE_RIGHT:
+                self.heading[i] = (self.heading[i] - arc) % TWO_PI
+            elif action == Action.FORWARD or action == Action.REVERSE:
+                sign = 1.0 if action == Action.FORWARD else -1.0
+                h = self.heading[i]
+                self.bodies[i].velocity = (
+                    sign * distance * math.cos(h),
+                    sign * distance * math.sin(h),
+                )
+                moving = True
+        if moving:
+            self._integrate(distance)
+
+    def move(self, i: int, distance: float) -> None:
+        """Move robot ``i`` alone by ``distance`` along its heading (negative: backwards)."""
+        h = self.heading[i]
+        self.bodies[i].velocity = (distance * math.cos(h), distance * math.sin(h))
+        self._integrate(abs(distance))
+
+    def _integrate(self, distance: float) -> None:
+        """Step the space one time unit in sub-steps of at most radius/4 of travel."""
+        n = max(1, math.ceil(distance / (self.radius / 4.0)))
+        dt = 1.0 / n
+        step = self.space.step
+        for _ in range(n):
+            step(dt)
+        for body in self.bodies:
+            body.velocity = (0.0, 0.0)
+        # Chipmunk detects contacts after integrating positions, so the last sub-step may
+        # leave an overlap of up to one sub-step; with collision_bias 0 the next step
+        # removes all overlap beyond the slop. Settle with the robots at rest.
+        for _ in range(SETTLE_STEPS):
+            step(dt)
+        for body in self.bodies:
+            body.velocity = (0.0, 0.0)
+
+    # -- geometry queries (for tests and the viewer) ----------------------------------
+    def wall_clearance(self, i: int = 0) -> float:
+        """Distance from robot ``i``'s edge to the nearest wall (negative = overlap)."""
+        p = self.bodies[i].position
+        best = math.inf
+        for seg in self.walls:
+            info = seg.point_query(p)
+            best = min(best, info.distance)
+        return best - self.radius
