@@ -352,6 +352,18 @@ def test_not_yaml_tab_line_number(tmp_path: Path) -> None:
     assert f"{path}: line 3: not valid YAML" in error_of(path)
 
 
+def test_duplicate_key(tmp_path: Path) -> None:
+    text = yaml.safe_dump(BASE, sort_keys=False) + "goals: []\n"
+    path = write(tmp_path, text)
+    line = text.count("\n")
+    assert error_of(path) == f"{path}: line {line}: not valid YAML: duplicate key 'goals'"
+
+
+def test_duplicate_key_nested(tmp_path: Path) -> None:
+    text = yaml.safe_dump(BASE, sort_keys=False).replace("heading_deg: null", "at: [1, 2]")
+    assert "not valid YAML: duplicate key 'at'" in error_of(write(tmp_path, text))
+
+
 @pytest.mark.parametrize("text", ["- 1\n- 2\n", "just text\n", "42\n"])
 def test_not_a_mapping(tmp_path: Path, text: str) -> None:
     path = write(tmp_path, text)
