@@ -96,7 +96,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--qtable", default=None, help="also describe this Q-table file")
 
     for name, module in EXTRA_COMMANDS.items():
-        mod = importlib.import_module(module)
+        try:  # TODO(session): remove once every module exists
+            mod = importlib.import_module(module)
+        except ModuleNotFoundError as exc:
+            if exc.name != module:
+                raise
+            continue
         p = sub.add_parser(name, help=(mod.__doc__ or name).strip().splitlines()[0])
         mod.add_arguments(p)
     return parser
@@ -104,7 +109,12 @@ def build_parser() -> argparse.ArgumentParser:
 
 #: Commands that live in their own modules: each module has ``add_arguments(parser)`` and
 #: ``run(args) -> int`` and imports heavy dependencies (pygame, matplotlib, ray) in ``run``.
-EXTRA_COMMANDS: dict[str, str] = {}
+EXTRA_COMMANDS: dict[str, str] = {
+    "view": "koolio_pymunk.viewer.app",
+    "plot": "koolio_pymunk.plotting",
+    "export": "koolio_pymunk.export",
+    "sweep": "koolio_pymunk.sweep",
+}
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -140,6 +150,8 @@ def cmd_train(args: argparse.Namespace) -> int:
     from .training import train
 
     _positive(args.episodes, "--episodes")
+    if args.robots < 1:
+        raise KoolioError(f"--robots: must be >= 1, got {args.robots}")
     env = _make_env(args)
     say = (lambda s: None) if args.quiet else print
     say("koolio-pm train")
@@ -151,6 +163,8 @@ def cmd_train(args: argparse.Namespace) -> int:
         "qtable",
         "log",
         "config",
+        "robots",
+        "init_qtable",
         "discard_unfinished",
     ):
         say(f"  {key}: {getattr(args, key)}")
@@ -158,15 +172,33 @@ def cmd_train(args: argparse.Namespace) -> int:
     say("configuration:")
     for line in env.config.to_yaml().splitlines():
         say("  " + line)
-    result = train(
-        env,
-        QTableStore(args.qtable),
-        args.episodes,
-        args.seed,
-        args.log,
-        discard_unfinished=args.discard_unfinished,
-        report=None if args.quiet else print,
-    )
+    store = QTableStore(args.qtable)
+    if args.init_qtable:
+        _seed_table(args.init_qtable, args.qtable, env, say)
+    report = None if args.quiet else print
+    if args.robots > 1:
+        from .multi import train_many
+
+        result = train_many(
+            env,
+            store,
+            args.episodes,
+            args.seed,
+            args.log,
+            robots=args.robots,
+            discard_unfinished=args.discard_unfinished,
+            report=report,
+        )
+    else:
+        result = train(
+            env,
+            store,
+            args.episodes,
+            args.seed,
+            args.log,
+            discard_unfinished=args.discard_unfinished,
+            report=report,
+        )
     rate = result.goals / max(1, result.episodes_run)
     say(
         f"done: {result.episodes_run} episodes, {result.goals} at the goal ({rate:.1%}), "
@@ -177,28 +209,63 @@ def cmd_train(args: argparse.Namespace) -> int:
     return 130 if result.interrupted else 0
 
 
+def _seed_table(init_path: str, qtable_path: str, env, say) -> None:
+    """``--init-qtable``: start a new table file from another table (either format)."""
+    from pathlib import Path
+
+    from .export import load_any_table
+    from .qtable import QTableStore, check_compatible
+    from .training import sensor_signature
+
+    if Path(qtable_path).exists():
+        raise KoolioError(
+            f"--init-qtable: {qtable_path} already exists; it would be resumed "
+            "instead (choose a new --qtable)"
+        )
+    table = load_any_table(init_path)
+    check_compatible(table, env.layout, sensor_signature(env.config), init_path)
+    store = QTableStore(qtable_path)
+    store.save(table)
+    say(
+        f"  starting from {init_path}: {len(table)} states, "
+        f"{table.meta.get('episodes', 0)} episodes"
+    )
+
+
 def cmd_eval(args: argparse.Namespace) -> int:
     from .qtable import check_compatible, load_qtable
     from .training import evaluate, sensor_signature
 
     _positive(args.episodes, "--episodes")
+    goal_all = args.goal == "all"
+    if goal_all:
+        args.goal = None
     env = _make_env(args)
     table = load_qtable(args.qtable)
     check_compatible(table, env.layout, sensor_signature(env.config), args.qtable)
-    res = evaluate(env, table, args.episodes, args.seed)
+    goals = env.arena.goal_names() if goal_all else [None]
+    results = [evaluate(env, table, args.episodes, args.seed, goal=g) for g in goals]
     if args.json:
-        print(json.dumps(res.as_dict(), sort_keys=True))
-    else:
+        out = [r.as_dict() for r in results]
+        print(json.dumps(out if goal_all else out[0], sort_keys=True))
+        return 0
+    print(
+        f"greedy evaluation of {args.qtable} on {env.arena.name}, {args.episodes} "
+        f"episodes per goal, seed {args.seed}"
+    )
+    print(
+        f"  {'goal':>6} {'goal rate':>10} {'end of world':>13} {'truncated':>10} "
+        f"{'mean steps':>11} {'mean bumps':>11} {'mean return':>12}"
+    )
+    for r in results:
         print(
-            f"greedy evaluation of {args.qtable} on {env.arena.name}, goal {res.goal}, "
-            f"{res.episodes} episodes, seed {args.seed}"
+            f"  {r.goal:>6} {r.goal_rate:>10.1%} {r.end_of_world_rate:>13.1%} "
+            f"{r.truncated_rate:>10.1%} {r.mean_steps:>11.1f} {r.mean_bumps:>11.1f} "
+            f"{r.mean_reward:>12.1f}"
         )
-        print(f"  goal rate          {res.goal_rate:7.1%}")
-        print(f"  end-of-world rate  {res.end_of_world_rate:7.1%}")
-        print(f"  truncated rate     {res.truncated_rate:7.1%}")
-        print(f"  mean steps         {res.mean_steps:7.1f}")
-        print(f"  mean bumps         {res.mean_bumps:7.1f}")
-        print(f"  mean return        {res.mean_reward:7.1f}")
+    if goal_all:
+        mean = sum(r.goal_rate for r in results) / len(results)
+        print(f"  {'all':>6} {mean:>10.1%}")
     return 0
 
 

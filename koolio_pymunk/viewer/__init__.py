@@ -1,0 +1,1 @@
+"""Drawing and the interactive window (pygame-ce). Nothing here is imported by the core."""
