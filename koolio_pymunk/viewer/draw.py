@@ -1,0 +1,185 @@
+"""Pure drawing functions: arena, robot and sensors onto a pygame surface (paper §5.4.5).
+
+Every function takes the target ``surface`` and a :class:`~koolio_pymunk.viewer.camera.Camera`
+(the only world-to-screen conversion) and draws; none owns a window, an event loop or any
+state beyond a font cache. The app (``viewer/app.py``), ``KoolioEnv.render`` (via
+``viewer/render.py``) and the arena editor (``tools/arena_editor.py``) all draw with them.
+
+Colours follow the paper: robot red, pink when a sonar reads Bump, purple past the end of
+the world, black at the goal; black sonar lines, blue lines from cameras that see the
+goal, yellow lines from cameras that see an end-of-world marker; goal and end-of-world
+markers are coloured dots.
+
+pygame must be initialised by the caller (``pygame.display.init()`` for surfaces,
+``pygame.font.init()`` for labels).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import pygame
+
+from ..arena import Arena, Point
+from .camera import Camera
+
+Color = tuple[int, int, int]
+
+# -- palette -----------------------------------------------------------------------------
+BACKGROUND: Color = (208, 212, 218)
+"""Outside the walls."""
+FLOOR: Color = (250, 250, 246)
+WALL: Color = (40, 44, 52)
+OBSTACLE: Color = (120, 124, 134)
+DOOR: Color = (176, 120, 64)
+PLATE: Color = (255, 236, 160)
+PLATE_TEXT: Color = (60, 40, 10)
+GOAL: Color = (0, 170, 60)
+"""The active goal's dot."""
+OTHER_GOAL: Color = (150, 200, 160)
+"""Goals that are not active this episode."""
+MARKER: Color = (230, 120, 0)
+"""End-of-world marker dots."""
+ZONE: Color = (236, 214, 244)
+"""End-of-world zone fill."""
+ZONE_EDGE: Color = (170, 110, 200)
+START: Color = (120, 160, 220)
+
+ROBOT_NORMAL: Color = (220, 0, 0)
+"""Paper: red."""
+ROBOT_BUMP: Color = (255, 105, 180)
+"""Paper: pink when a sonar reads Bump."""
+ROBOT_END_OF_WORLD: Color = (128, 0, 160)
+"""Paper: purple past the end of the world."""
+ROBOT_GOAL: Color = (0, 0, 0)
+"""Paper: black at the goal."""
+HEADING: Color = (255, 255, 255)
+SONAR_LINE: Color = (0, 0, 0)
+SONAR_CONE: Color = (200, 200, 200)
+CAMERA_GOAL_LINE: Color = (0, 70, 255)
+"""Paper: blue from a camera that sees the goal."""
+CAMERA_EOW_LINE: Color = (235, 200, 0)
+"""Paper: yellow from a camera that sees an end-of-world marker."""
+
+ROBOT_STATES: dict[str, Color] = {
+    "normal": ROBOT_NORMAL,
+    "bump": ROBOT_BUMP,
+    "end_of_world": ROBOT_END_OF_WORLD,
+    "goal": ROBOT_GOAL,
+}
+"""Robot colour by state (see :func:`robot_state`)."""
+
+_FONTS: dict[int, pygame.font.Font] = {}
+
+
+def font(size: int) -> pygame.font.Font:
+    """The bundled pygame font at ``size`` pixels (cached; needs ``pygame.font.init()``)."""
+    f = _FONTS.get(size)
+    if f is None:
+        f = _FONTS[size] = pygame.font.Font(None, size)
+    return f
+
+
+def _poly(camera: Camera, points: Sequence[Point]) -> list[tuple[int, int]]:
+    return [camera.to_screen(p) for p in points]
+
+
+# -- arena -------------------------------------------------------------------------------
+def draw_arena(
+    surface: pygame.Surface,
+    arena: Arena,
+    camera: Camera,
+    *,
+    labels: bool = True,
+    robot_radius: float = 10.0,
+    show_start: bool = True,
+) -> None:
+    """Draw ``arena`` as given (pass ``arena.to_world()`` for the simulator's frame).
+
+    Draws, back to front: the floor inside the walls, end-of-world zones (a polygon, or a
+    disc of one robot diameter around a marker without one), obstacles, the walls, doors
+    with their number plates (room numbers, when ``labels``), the start point, goals as
+    dots (the active one larger and darker) and end-of-world markers as orange dots.
+    ``robot_radius`` sizes the default zone discs. Nothing outside the viewport is
+    touched except through pygame's clipping of ``surface``.
+    """
+    clip = surface.get_clip()
+    surface.set_clip(pygame.Rect(camera.viewport))
+    try:
+        surface.fill(BACKGROUND, pygame.Rect(camera.viewport))
+        walls = _poly(camera, arena.walls)
+        if len(walls) >= 3:
+            pygame.draw.polygon(surface, FLOOR, walls)
+        _draw_zones(surface, arena, camera, robot_radius)
+        for poly in arena.obstacles:
+            pts = _poly(camera, poly)
+            if len(pts) >= 3:
+                pygame.draw.polygon(surface, OBSTACLE, pts)
+                pygame.draw.polygon(surface, WALL, pts, width=2)
+        if len(walls) >= 2:
+            pygame.draw.lines(surface, WALL, True, walls, width=3)
+        _draw_doors(surface, arena, camera, labels)
+        if show_start:
+            s = camera.to_screen(arena.start.at)
+            pygame.draw.circle(surface, START, s, max(3, camera.scale(3)), width=2)
+        for g in arena.goals:
+            active = g.name == arena.active_goal
+            colour = GOAL if active else OTHER_GOAL
+            pygame.draw.circle(surface, colour, camera.to_screen(g.at), 6 if active else 3)
+        for m in arena.end_of_world:
+            pygame.draw.circle(surface, MARKER, camera.to_screen(m.at), 6)
+            pygame.draw.circle(surface, WALL, camera.to_screen(m.at), 6, width=1)
+    finally:
+        surface.set_clip(clip)
+
+
+def _draw_zones(surface: pygame.Surface, arena: Arena, camera: Camera, radius: float) -> None:
+    for m in arena.end_of_world:
+        if m.zone is not None and len(m.zone) >= 3:
+            pts = _poly(camera, m.zone)
+            pygame.draw.polygon(surface, ZONE, pts)
+            pygame.draw.polygon(surface, ZONE_EDGE, pts, width=1)
+        else:
+            c = camera.to_screen(m.at)
+            r = camera.scale(2.0 * radius)
+            pygame.draw.circle(surface, ZONE, c, r)
+            pygame.draw.circle(surface, ZONE_EDGE, c, r, width=1)
+
+
+def _outward(arena: Arena, a: Point, b: Point) -> tuple[float, float]:
+    """Unit normal of door span ``a``-``b`` pointing away from the walls' centre."""
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    n = math.hypot(dx, dy) or 1.0
+    nx, ny = -dy / n, dx / n
+    xmin, ymin, xmax, ymax = arena.bounds()
+    cx, cy = (xmin + xmax) / 2.0, (ymin + ymax) / 2.0
+    mx, my = (a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0
+    if nx * (mx - cx) + ny * (my - cy) < 0:
+        nx, ny = -nx, -ny
+    return nx, ny
+
+
+def _draw_doors(surface: pygame.Surface, arena: Arena, camera: Camera, labels: bool) -> None:
+    for d in arena.doors:
+        pygame.draw.line(
+            surface,
+            DOOR,
+            camera.to_screen(d.a),
+            camera.to_screen(d.b),
+            width=max(4, camera.scale(2)),
+        )
+        plate = camera.to_screen(d.plate)
+        pygame.draw.rect(surface, PLATE_TEXT, pygame.Rect(plate[0] - 3, plate[1] - 3, 6, 6))
+        if not labels:
+            continue
+        text = font(16).render(d.name, True, PLATE_TEXT)
+        nx, ny = _outward(arena, d.a, d.b)
+        # Centre of the label: just outside the wall, beside the plate (screen y is down).
+        off = 4 + max(text.get_width(), text.get_height()) / 2.0
+        cx = plate[0] + nx * off
+        cy = plate[1] - ny * off
+        box = text.get_rect(center=(round(cx), round(cy))).inflate(6, 2)
+        pygame.draw.rect(surface, PLATE, box)
+        pygame.draw.rect(surface, PLATE_TEXT, box, width=1)
+        surface.blit(text, text.get_rect(center=box.center))
