@@ -32,9 +32,12 @@ Door table format (YAML)::
       - {room: 302, side: north, tiles: 4, width_in: 36, plate: right}
       - {room: 311, side: south, tiles: 35, width_in: 36, plate: left}
 
-``width_in`` is optional (default 36 = 1 1/2 tiles). Every problem with a table is an
-:class:`~koolio_pymunk.errors.ArenaError` with a one-line message naming the file, the
-item and the problem.
+Each door gives its distance from its end of the hallway either in ceiling tiles
+(``tiles``, as the paper's Figure 3 counts them) or in inches (``inches``), exactly one of
+the two: ``{room: 305, side: south, inches: 432, plate: right}`` is the same door as
+``tiles: 18``. ``width_in`` is optional (default 36 = 1 1/2 tiles). Every problem with a
+table is an :class:`~koolio_pymunk.errors.ArenaError` with a one-line message naming the
+file, the item and the problem.
 """
 
 from __future__ import annotations
@@ -66,8 +69,8 @@ TABLE_KEYS = ("name", "hallway", "start", "active_goal", "rotate_deg", "doors")
 TABLE_REQUIRED = ("hallway", "start", "active_goal", "doors")
 HALLWAY_KEYS = ("length_tiles", "width_tiles", "tile_in", "t_depth_in", "t_overhang_in")
 START_KEYS = ("at_tiles_from_stairs", "at", "heading_deg")
-DOOR_KEYS = ("room", "side", "tiles", "width_in", "plate")
-DOOR_REQUIRED = ("room", "side", "tiles", "plate")
+DOOR_KEYS = ("room", "side", "tiles", "inches", "width_in", "plate")
+DOOR_REQUIRED = ("room", "side", "plate")
 DEFAULT_DOOR_WIDTH_IN = 36.0
 PLATE_BEYOND_DOOR_IN = 6.0
 PLATE_OFF_WALL_IN = 1.0
@@ -206,7 +209,7 @@ def _choice(value: object, choices: tuple[str, ...], source: str, item: str) -> 
 
 
 def _door(value: object, shape: HallwayShape, source: str, item: str) -> DoorSpec:
-    data = _mapping(value, source, item, "expected {room, side, tiles, width_in, plate}")
+    data = _mapping(value, source, item, "expected {room, side, tiles or inches, width_in, plate}")
     _check_keys(data, DOOR_KEYS, DOOR_REQUIRED, source, f"{item}.")
     room = _room(data["room"], source, f"{item}.room")
     side = _choice(data["side"], ("north", "south"), source, f"{item}.side")
@@ -216,16 +219,25 @@ def _door(value: object, shape: HallwayShape, source: str, item: str) -> DoorSpe
         _fail(
             source, f"{item}.side", f"room {room} is {parity}, so its door is on the {wanted} wall"
         )
-    tiles = _positive(data["tiles"], source, f"{item}.tiles", allow_zero=True)
+    distance = _door_distance(data, shape, source, item)
     width = _positive(data.get("width_in", DEFAULT_DOOR_WIDTH_IN), source, f"{item}.width_in")
     plate_side = _choice(data["plate"], ("left", "right"), source, f"{item}.plate")
     if side == "north":
-        x0 = tiles * shape.tile
+        x0 = distance
         x1 = x0 + width
     else:
-        x1 = shape.length - tiles * shape.tile
+        x1 = shape.length - distance
         x0 = x1 - width
     return DoorSpec(room, side, x0, x1, _plate(side, plate_side, x0, x1, shape))
+
+
+def _door_distance(data: dict, shape: HallwayShape, source: str, item: str) -> float:
+    """Inches from the door's end of the hallway: ``tiles`` x tile size, or ``inches``."""
+    if ("tiles" in data) == ("inches" in data):
+        _fail(source, item, "give exactly one of tiles or inches (distance from the hallway's end)")
+    if "tiles" in data:
+        return _positive(data["tiles"], source, f"{item}.tiles", allow_zero=True) * shape.tile
+    return _positive(data["inches"], source, f"{item}.inches", allow_zero=True)
 
 
 def _plate(side: str, plate_side: str, x0: float, x1: float, shape: HallwayShape) -> Point:

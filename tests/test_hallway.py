@@ -251,3 +251,38 @@ def test_bad_table_files(tmp_path: Path) -> None:
     empty.write_text("")
     with pytest.raises(ArenaError, match=r"empty\.yaml: empty file"):
         load_door_table(empty)
+
+
+# -- door distances in inches (added with the arena editor's door-table importer) ----------
+def test_door_distance_in_inches_equals_tiles() -> None:
+    by_tiles = _minimal()
+    by_inches = copy.deepcopy(by_tiles)
+    for row in by_inches["doors"]:
+        row["inches"] = row.pop("tiles") * 24
+    assert build_hallway(by_inches) == build_hallway(by_tiles)
+    by_inches["doors"][0]["inches"] = 100.5
+    arena = build_hallway(by_inches)
+    assert arena.doors[0].a == (100.5, 88) and arena.doors[0].b == (136.5, 88)
+    assert arena.goal("302").at == (142.5, 87)
+
+
+@pytest.mark.parametrize(
+    ("row", "item", "problem"),
+    [
+        (
+            {"tiles": 10, "inches": 240},
+            "doors[2]",
+            "give exactly one of tiles or inches (distance from the hallway's end)",
+        ),
+        ({}, "doors[2]", "give exactly one of tiles or inches (distance from the hallway's end)"),
+        ({"inches": -1}, "doors[2].inches", "must be >= 0: -1"),
+        ({"inches": "far"}, "doors[2].inches", "not a number: 'far'"),
+        ({"inch": 240}, "doors[2].inch", "unknown key (did you mean 'inches'?)"),
+    ],
+)
+def test_door_distance_errors(row: dict, item: str, problem: str) -> None:
+    data = _minimal()
+    data["doors"].append({"room": 304, "side": "north", "plate": "left", **row})
+    with pytest.raises(ArenaError) as info:
+        build_hallway(data, "t.yaml")
+    assert str(info.value) == f"t.yaml: {item}: {problem}"
