@@ -9,11 +9,11 @@ sub-steps that move the robot at most ``radius / 4`` each, with ``collision_bias
 robot stops at (or slides along) a wall, never overlapping it by more than the slop and
 never tunnelling. When a wall is within reach of the move (pymunk's nearest-point query),
 the sub-steps shrink to ``FINE_STEP``: a deep sub-step past the saddle of a gap narrower
-than the robot would let the two push-outs cancel and squeeze it through. Contacts are found after positions are integrated, so the last sub-step
-can leave an overlap; two zero-velocity settle steps (bias 0 = remove all overlap beyond
-the slop in one step) push it out. The velocity is then zeroed: a move is an action, not
-momentum.
-Rotations set the heading directly (a circle's contacts do not depend on it).
+than the robot would let the two push-outs cancel and squeeze it through. Contacts are
+found after positions are integrated, so the last sub-step can leave an overlap; two
+zero-velocity settle steps (bias 0 = remove all overlap beyond the slop in one step) push
+it out. The velocity is then zeroed: a move is an action, not momentum. Rotations set
+the heading directly (a circle's contacts do not depend on it).
 
 Several robots may share the world (``n_robots``): each is its own circle in the same
 space but in one non-colliding shape group, so each lives in its own copy of the arena.
