@@ -19,9 +19,11 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
+import numpy as np
 import pygame
 
 from ..arena import Arena, Point
+from ..sensors import Readings, SensorSuite
 from .camera import Camera
 
 Color = tuple[int, int, int]
@@ -183,3 +185,84 @@ def _draw_doors(surface: pygame.Surface, arena: Arena, camera: Camera, labels: b
         pygame.draw.rect(surface, PLATE, box)
         pygame.draw.rect(surface, PLATE_TEXT, box, width=1)
         surface.blit(text, text.get_rect(center=box.center))
+
+
+# -- text ----------------------------------------------------------------------------------
+_TEXT: dict[tuple[str, int, Color], pygame.Surface] = {}
+
+
+def text(s: str, size: int = 18, colour: Color = (20, 20, 20)) -> pygame.Surface:
+    """A rendered label, cached (labels repeat from frame to frame)."""
+    key = (s, size, colour)
+    surf = _TEXT.get(key)
+    if surf is None:
+        if len(_TEXT) > 4000:
+            _TEXT.clear()
+        surf = _TEXT[key] = font(size).render(s, True, colour)
+    return surf
+
+
+# -- robot and sensors -------------------------------------------------------------------
+ROBOT_PLAIN: Color = (60, 90, 150)
+"""The robot when Show Sensors is off (no state colouring)."""
+
+
+def robot_state(event: str | None, bump: bool) -> str:
+    """The paper's colour state: ``goal`` > ``end_of_world`` > ``bump`` > ``normal``.
+
+    ``event`` is the last step's judgement event (``KoolioEnv.judgement.event``), ``bump``
+    whether any sonar reads Bump now.
+
+    >>> robot_state("goal", True), robot_state("bump", True), robot_state(None, False)
+    ('goal', 'bump', 'normal')
+    """
+    if event in ("goal", "end_of_world"):
+        return event
+    return "bump" if bump else "normal"
+
+
+def draw_robot(
+    surface: pygame.Surface,
+    camera: Camera,
+    pose: tuple[float, float, float],
+    radius: float,
+    colour: Color = ROBOT_NORMAL,
+) -> None:
+    """The robot: a filled circle of ``radius`` inches and a white heading line."""
+    x, y, h = pose
+    c = camera.to_screen((x, y))
+    r = camera.scale(radius)
+    pygame.draw.circle(surface, colour, c, r)
+    pygame.draw.circle(surface, WALL, c, r, width=1)
+    tip = camera.to_screen((x + radius * math.cos(h), y + radius * math.sin(h)))
+    pygame.draw.line(surface, HEADING, c, tip, width=max(2, camera.scale(radius / 5.0)))
+
+
+def draw_sensors(
+    surface: pygame.Surface,
+    camera: Camera,
+    pose: tuple[float, float, float],
+    suite: SensorSuite,
+    readings: Readings,
+) -> None:
+    """Sensor lines (paper §5.4.5): black sonar sub-arc rays to their hits, a blue line
+    from each camera that sees the goal, a yellow one from each camera that sees an
+    end-of-world marker (to the marker it sees). Draw the robot afterwards, on top."""
+    x, y, h = pose
+    c = camera.to_screen((x, y))
+    angles = h + suite.ray_offsets
+    dist = readings.rays
+    cos, sin = np.cos(angles), np.sin(angles)
+    ex, ey = x + dist * cos, y + dist * sin
+    for idx in np.ndindex(angles.shape):
+        end = camera.to_screen((float(ex[idx]), float(ey[idx])))
+        pygame.draw.line(surface, SONAR_LINE, c, end, width=1)
+    far = suite.far
+    width = max(2, camera.scale(1.0))
+    for cam in range(suite.n_camera):
+        if readings.goal[cam] < far:
+            pygame.draw.line(surface, CAMERA_GOAL_LINE, c, camera.to_screen(suite.goal), width)
+        k = readings.eow_target[cam]
+        if k >= 0:
+            end = camera.to_screen(suite.markers[k])
+            pygame.draw.line(surface, CAMERA_EOW_LINE, c, end, width)

@@ -1,0 +1,166 @@
+"""``KoolioEnv.render()``: the arena, robot and sensors as a picture or in a window.
+
+:class:`EnvRenderer` draws the environment's current state with the functions of
+:mod:`koolio_pymunk.viewer.draw`: for ``rgb_array`` it returns an ``H x W x 3`` uint8
+array; for ``human`` it shows the same picture in a pygame window. A long arena (the
+1632 x 88 hallway) gets two views: the whole arena on top and a zoomed view that follows
+the robot below; a compact arena gets one view. A status line at the bottom gives the
+episode's reward, steps, bumps and last event.
+
+:func:`draw_env` (arena + sensor lines + robot, in one camera's viewport) is shared with
+the interactive viewer (``viewer/app.py``).
+"""
+
+from __future__ import annotations
+
+import pygame
+
+from ..env import KoolioEnv
+from ..world import ACTION_NAMES
+from .camera import Camera
+from .draw import (
+    ROBOT_PLAIN,
+    ROBOT_STATES,
+    draw_arena,
+    draw_robot,
+    draw_sensors,
+    robot_state,
+    text,
+)
+
+#: Arenas whose height / width is below this get an overview plus a follow view.
+LONG_ARENA = 0.35
+STATUS_H = 26
+
+
+def robot_colour(env: KoolioEnv) -> tuple[int, int, int]:
+    """The paper's robot colour for ``env``'s current state."""
+    event = env.judgement.event if env.judgement is not None else None
+    return ROBOT_STATES[robot_state(event, env.sensors.bump(env.readings))]
+
+
+def draw_env(
+    surface: pygame.Surface,
+    camera: Camera,
+    env: KoolioEnv,
+    *,
+    show_sensors: bool = True,
+    labels: bool = True,
+    lines: bool = True,
+) -> None:
+    """Arena, then (with ``show_sensors``) the sensor lines, then the robot, in the
+    camera's viewport. With ``show_sensors`` the robot has the paper's state colour (and
+    ``lines=False`` leaves the sensor lines out, for a small overview); without it the
+    robot is drawn plain blue."""
+    draw_arena(
+        surface, env.world_arena, camera, labels=labels, robot_radius=env.config.robot.radius
+    )
+    clip = surface.get_clip()
+    surface.set_clip(pygame.Rect(camera.viewport))
+    pose = env.world.pose(0)
+    if show_sensors:
+        if lines:
+            draw_sensors(surface, camera, pose, env.sensors, env.readings)
+        colour = robot_colour(env)
+    else:
+        colour = ROBOT_PLAIN
+    draw_robot(surface, camera, pose, env.config.robot.radius, colour)
+    surface.set_clip(clip)
+
+
+def arena_bounds(env: KoolioEnv) -> tuple[float, float, float, float]:
+    return env.world_arena.bounds()
+
+
+def is_long(bounds: tuple[float, float, float, float]) -> bool:
+    xmin, ymin, xmax, ymax = bounds
+    return (ymax - ymin) / max(1e-9, xmax - xmin) < LONG_ARENA
+
+
+def status_line(env: KoolioEnv) -> str:
+    j = env.judgement
+    last = (
+        f"{ACTION_NAMES[env.last_action]} -> {j.event}"
+        if j is not None and env.last_action is not None
+        else "start"
+    )
+    return (
+        f"goal {env.goal_name}   reward {env.episode_reward:g}   steps {env.steps}   "
+        f"bumps {env.bumps}   last {last}" + ("   RESCUED" if env.has_been_rescued else "")
+    )
+
+
+class EnvRenderer:
+    """Draws a :class:`KoolioEnv` for ``render_mode`` ``rgb_array`` or ``human``."""
+
+    def __init__(self, env: KoolioEnv, width: int = 1200) -> None:
+        pygame.font.init()
+        self.env = env
+        bounds = arena_bounds(env)
+        xmin, ymin, xmax, ymax = bounds
+        aspect = (ymax - ymin) / max(1e-9, xmax - xmin)
+        self.cameras: list[Camera] = []
+        if is_long(bounds):
+            top_h = max(60, round(width * aspect * 1.1) + 10)
+            follow_h = 280
+            overview = Camera((0, 0, width, top_h))
+            overview.fit(bounds, margin=0.02)
+            follow = Camera((0, top_h, width, follow_h))
+            follow.fit(bounds, margin=0.05)
+            follow.zoom = follow_h / ((ymax - ymin) * 1.15)
+            self.follow: Camera | None = follow
+            self.cameras = [overview, follow]
+            height = top_h + follow_h + STATUS_H
+        else:
+            width = min(width, 720)
+            view_h = round(width * aspect)
+            main = Camera((0, 0, width, view_h))
+            main.fit(bounds, margin=0.04)
+            self.follow = None
+            self.cameras = [main]
+            height = view_h + STATUS_H
+        self.size = (width, height)
+        self.surface = pygame.Surface(self.size)
+        self._window: pygame.Surface | None = None
+        self._clock: pygame.time.Clock | None = None
+
+    def draw(self) -> pygame.Surface:
+        """Draw the current state onto :attr:`surface` and return it."""
+        env = self.env
+        if self.follow is not None:
+            x, _, _ = env.world.pose(0)
+            _, ymin, _, ymax = arena_bounds(env)
+            self.follow.follow((x, (ymin + ymax) / 2.0))
+        for i, cam in enumerate(self.cameras):
+            overview = self.follow is not None and i == 0
+            draw_env(self.surface, cam, env, lines=not overview)
+            pygame.draw.rect(self.surface, (90, 90, 100), pygame.Rect(cam.viewport), width=1)
+        w, h = self.size
+        strip = pygame.Rect(0, h - STATUS_H, w, STATUS_H)
+        self.surface.fill((243, 244, 247), strip)
+        self.surface.blit(text(status_line(env), 20, (25, 25, 25)), (8, strip.y + 5))
+        return self.surface
+
+    def render(self, mode: str):
+        """``rgb_array``: an H x W x 3 uint8 array; ``human``: draw in a window."""
+        surf = self.draw()
+        if mode == "rgb_array":
+            return pygame.surfarray.array3d(surf).transpose(1, 0, 2).copy()
+        if mode == "human":
+            if self._window is None:
+                pygame.display.init()
+                self._window = pygame.display.set_mode(self.size)
+                pygame.display.set_caption("Koolio (pymunk)")
+                self._clock = pygame.time.Clock()
+            self._window.blit(surf, (0, 0))
+            pygame.event.pump()
+            pygame.display.flip()
+            assert self._clock is not None
+            self._clock.tick(self.env.metadata.get("render_fps", 30))
+            return None
+        raise ValueError(f"render mode {mode!r} is not supported (human, rgb_array)")
+
+    def close(self) -> None:
+        if self._window is not None:
+            pygame.display.quit()
+            self._window = None
