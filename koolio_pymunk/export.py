@@ -1,0 +1,178 @@
+"""Export a Q-table as a policy file for the robot (koolio-policy JSON, version 1).
+
+``koolio-pm export --qtable FILE --out POLICY`` writes the Q-table in the paper's keyword
+format: every Table 12 keyword with its Q value, the greedy action of every visited state,
+the keyword layout, and the sensor thresholds the robot needs to encode raw readings
+(see :func:`koolio_pymunk.robot_runtime.validate_document` for every field, and
+``docs/handoff.md``). ``koolio_pymunk/robot_runtime.py`` (standard library only) runs and
+keeps learning that policy on the robot and saves it back in the same format.
+
+The input may be a ``.qtable`` file or a policy file (e.g. one back from the robot); an
+``--out`` name ending in ``.qtable`` writes the simulator's binary format instead, so a
+table learned on the robot can be evaluated or viewed with the other commands.
+
+:func:`load_any_table` reads either format (``koolio-pm train --init-qtable``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+from typing import Any
+
+from . import robot_runtime as rt
+from .config import Config, load_config
+from .errors import QTableError, located
+from .qtable import MAGIC, KeywordLayout, QTable, atomic_write, load_qtable
+
+WRITTEN_BY = "koolio-pm export"
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--qtable",
+        default="runs/hallway.qtable",
+        help="table to export: a .qtable file or a policy file (default runs/hallway.qtable)",
+    )
+    p.add_argument(
+        "--out",
+        required=True,
+        help="policy file to write (JSON); a name ending in .qtable writes the binary format",
+    )
+    p.add_argument(
+        "--config",
+        default=None,
+        help="YAML configuration whose learner (alpha, gamma, epsilon) and rewards go into "
+        "the policy as the robot's defaults (default: built-in defaults)",
+    )
+    p.add_argument(
+        "--episode",
+        type=int,
+        default=None,
+        help="episode whose epsilon (from the schedule) is the robot's default "
+        "(default: the table's episode count)",
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    table = load_any_table(args.qtable)
+    out = Path(args.out)
+    if out.suffix == ".qtable":
+        out.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write(out, table.to_bytes())
+        print(f"wrote {out}: {len(table)} states, {table.meta.get('episodes', 0)} episodes")
+        return 0
+    cfg = load_config(args.config)
+    doc = policy_document(table, cfg, episode=args.episode, source=args.qtable)
+    write_policy(doc, out)
+    lay = doc["layout"]
+    print(
+        f"wrote {out}: {rt.FORMAT} v{rt.VERSION}, {doc['n_states']} states, "
+        f"{len(doc['entries'])} keywords ({lay['total_bits']}-bit), "
+        f"{doc['episodes']} episodes, {out.stat().st_size:,} bytes"
+    )
+    return 0
+
+
+def policy_document(
+    table: QTable, cfg: Config | None = None, episode: int | None = None, source: str = "<table>"
+) -> dict[str, Any]:
+    """The koolio-policy document of ``table`` (validated by the robot runtime's reader).
+
+    The sensor encoding comes from the table's own sensor signature (what it was learned
+    with); ``cfg`` supplies the robot's default learner settings and the rewards.
+    """
+    sensors = table.meta.get("sensors")
+    if not isinstance(sensors, dict) or not sensors:
+        raise QTableError(located(source, "sensors", "the table names no sensor layout"))
+    cfg = cfg or Config()
+    n_camera = len(sensors["camera_sensors_deg"])
+    episodes = int(table.meta.get("episodes", 0))
+    eps_episode = episodes if episode is None else episode
+    for state, row in table.rows.items():
+        if not all(math.isfinite(q) for q in row):
+            raise QTableError(located(source, f"state {state}", "non-finite Q value"))
+    encoding = {
+        "thresholds": {
+            "sonar": [float(t) for t in sensors["sonar_thresholds"]],
+            "camera": [float(t) for t in sensors["camera_thresholds"]],
+        },
+        "sonar_groups": [list(g) for g in sensors["sonar_groups"]],
+        "n_sonar": len(sensors["sonar_sensors_deg"]),
+        "n_camera": n_camera,
+        "max_camera_view": float(sensors["max_camera_view"]),
+        "compass_in_state": bool(sensors["compass_in_state"]),
+    }
+    lay = table.layout
+    doc: dict[str, Any] = {
+        "format": rt.FORMAT,
+        "version": rt.VERSION,
+        "written_by": WRITTEN_BY,
+        "layout": rt.Layout(lay.fields, lay.n_actions).to_json(),
+        "actions": list(rt.ACTION_NAMES[: lay.n_actions]),
+        "encoding": rt.encoding_json(rt.Encoder(encoding)),
+        "sensors": sensors,
+        "learner": {
+            "alpha": cfg.learner.alpha,
+            "gamma": cfg.learner.gamma,
+            "epsilon": cfg.learner.epsilon.at(max(0, eps_episode)),
+        },
+        "rewards": {k: float(v) for k, v in vars(cfg.rewards).items()},
+        "q_init": float(table.q_init),
+        "episodes": episodes,
+    }
+    doc.update(rt.rows_json(table.rows, lay.action_bits))
+    try:
+        rt.validate_document(doc, source)
+    except rt.PolicyError as exc:
+        raise QTableError(str(exc)) from None
+    return doc
+
+
+def write_policy(doc: dict[str, Any], out: Path) -> None:
+    """Write a policy document atomically."""
+    if not out.parent.exists():
+        out.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write(out, rt.dump_document(doc).encode("utf-8"))
+
+
+def export_policy(table: QTable, out: str | Path, cfg: Config | None = None) -> dict[str, Any]:
+    """Write ``table`` as a policy file; returns the document."""
+    doc = policy_document(table, cfg)
+    write_policy(doc, Path(out))
+    return doc
+
+
+def table_from_policy(policy: rt.Policy) -> QTable:
+    """The simulator's QTable of a loaded policy (layout, sensors, episodes, rows)."""
+    lay = policy.layout
+    layout = KeywordLayout(tuple(zip(lay.names, lay.levels)), lay.n_actions)
+    if layout.bits != lay.bits or layout.shifts != lay.shifts:  # pragma: no cover
+        raise QTableError(f"{policy.source}: layout: keyword bits differ from the simulator's")
+    meta = {"sensors": policy.sensors, "episodes": policy.episodes}
+    rows = {k: list(v) for k, v in policy.rows.items()}
+    return QTable(layout, meta, policy.q_init, rows)
+
+
+def load_any_table(path: str | Path) -> QTable:
+    """Read a ``.qtable`` file or a koolio-policy file; QTableError (one line) if bad.
+
+    The caller checks the layout and sensors with :func:`qtable.check_compatible`.
+    """
+    p = Path(path)
+    try:
+        with open(p, "rb") as fh:
+            head = fh.read(64)
+    except OSError as exc:
+        raise QTableError(located(str(p), "", f"cannot read: {exc.strerror}")) from None
+    if head[: len(MAGIC)] == MAGIC:
+        return load_qtable(p)
+    if head.lstrip()[:1] != b"{":
+        raise QTableError(
+            located(str(p), "", "neither a .qtable file nor a koolio-policy (JSON) file")
+        )
+    try:
+        return table_from_policy(rt.Policy.load(str(p)))
+    except rt.PolicyError as exc:
+        raise QTableError(str(exc)) from None

@@ -1,0 +1,802 @@
+"""Koolio robot runtime: run and keep learning an exported policy on the real robot.
+
+This one file is all the robot's computer needs: it uses **only the Python standard
+library** (Python 3.10 or newer) and imports nothing from ``koolio_pymunk``, so it can be copied
+onto the robot on its own. It reads the policy file written by ``koolio-pm export``
+(format ``koolio-policy``, version 1; every field is described in
+:func:`validate_document` and in ``docs/handoff.md``), and:
+
+* encodes raw sensor readings into the state exactly as the simulator does (Tables 6, 7
+  and 12 of the paper, with the thresholds stored in the file): :meth:`Policy.encode`;
+* chooses actions, greedy or epsilon-greedy: :meth:`Policy.greedy`, :meth:`Policy.act`;
+* applies the Table 11 update from real transitions: :meth:`Policy.update`, with the
+  same floating-point operations as the simulator's learner;
+* saves the table atomically in the same format (temporary file, fsync, rename; the
+  previous file is kept as ``<file>.bak``), so ``koolio-pm train --init-qtable`` can
+  continue learning in simulation from what the robot learned;
+* writes the same per-episode CSV log as ``koolio-pm train``
+  (``episode,reward,steps,bumps,outcome,rescued,epsilon,goal``), so ``koolio-pm plot``
+  draws real-robot learning curves too: :class:`EpisodeLog`.
+
+A learning loop on the robot (``robot.*`` stands for the robot's own driver code)::
+
+    from robot_runtime import Policy, RobotLearner
+
+    policy = Policy.load("policy.json")
+    learner = RobotLearner(policy, save_path="policy.json", log_path="robot.csv",
+                           epsilon=0.05, seed=1, goal="302")
+    sonar, goal_cam, eow_cam = robot.read()          # inches from the robot's edge
+    learner.begin(policy.encode(sonar, goal_cam, eow_cam))
+    while True:
+        action = learner.choose()                    # 0 Stop .. 4 Reverse
+        robot.perform(action)
+        sonar, goal_cam, eow_cam = robot.read()
+        event, reward, terminal = policy.judge(action, sonar, goal_cam,
+                                               end_of_world=robot.off_the_end())
+        learner.step(action, reward, policy.encode(sonar, goal_cam, eow_cam), terminal,
+                     bump=policy.bump(sonar))
+        if terminal:
+            learner.end(event)                       # log row + atomic save
+            break
+
+Raw readings: ``sonar`` is one distance per sonar (inches from the robot's edge, in the
+order of ``sensors.sonar_sensors_deg``); ``goal_cam`` and ``eow_cam`` are one distance per
+camera to the goal's plate and to the nearest end-of-world marker, ``None`` (or
+``float("inf")``) when the camera does not see one.
+
+``python robot_runtime.py POLICY`` prints a summary of a policy file.
+"""
+
+from __future__ import annotations
+
+import bisect
+import csv
+import io
+import itertools
+import json
+import math
+import os
+import random
+import shutil
+import sys
+from collections.abc import Sequence
+from typing import Any
+
+FORMAT = "koolio-policy"
+VERSION = 1
+#: The paper's five actions; an action's index is the low bits of the keyword.
+ACTION_NAMES = ("Stop", "RotateLeft", "RotateRight", "Forward", "Reverse")
+STOP = 0
+#: Columns of the per-episode log (identical to ``koolio-pm train``'s log).
+LOG_FIELDS = ("episode", "reward", "steps", "bumps", "outcome", "rescued", "epsilon", "goal")
+#: Events of :meth:`Policy.judge`, in the paper's order of priority (first wins).
+EVENTS = ("goal", "end_of_world", "bump", "stop", "reverse", "turn", "forward")
+_ACTION_EVENTS = ("stop", "turn", "turn", "forward", "reverse")
+
+
+class PolicyError(ValueError):
+    """A malformed policy file or a bad argument: one line, ``source: item: problem``."""
+
+
+def _err(source: str, item: str, problem: str) -> PolicyError:
+    return PolicyError(f"{source}: {item}: {problem}" if item else f"{source}: {problem}")
+
+
+def field_bits(levels: int) -> int:
+    """Bits of a state field with ``levels`` codes: ``max(1, ceil(log2(levels)))``.
+
+    >>> [field_bits(n) for n in (1, 2, 3, 4, 5, 8, 9)]
+    [1, 1, 2, 2, 3, 3, 4]
+    """
+    return max(1, (int(levels) - 1).bit_length())
+
+
+class Layout:
+    """The Table 12 keyword: state fields most significant first, the action lowest.
+
+    >>> lay = Layout([("A", 3), ("B", 4)], n_actions=5)
+    >>> lay.shifts, lay.action_bits, lay.keyword((2, 1), 3)
+    ((5, 3), 3, 75)
+    >>> lay.decode(75)
+    ((2, 1), 3)
+    """
+
+    def __init__(self, fields: Sequence[tuple[str, int]], n_actions: int) -> None:
+        self.names = tuple(str(n) for n, _ in fields)
+        self.levels = tuple(int(lv) for _, lv in fields)
+        self.n_actions = int(n_actions)
+        self.bits = tuple(field_bits(lv) for lv in self.levels)
+        self.action_bits = field_bits(self.n_actions)
+        shifts, pos = [], self.action_bits
+        for b in reversed(self.bits):
+            shifts.append(pos)
+            pos += b
+        self.shifts = tuple(reversed(shifts))
+        self.total_bits = pos
+
+    def state_key(self, codes: Sequence[int]) -> int:
+        """The keyword without its action bits (``keyword >> action_bits``)."""
+        key = 0
+        for code, b in zip(codes, self.bits):
+            key = (key << b) | int(code)
+        return key
+
+    def keyword(self, codes: Sequence[int], action: int) -> int:
+        return (self.state_key(codes) << self.action_bits) | int(action)
+
+    def decode(self, keyword: int) -> tuple[tuple[int, ...], int]:
+        """``(codes, action)`` of a keyword."""
+        action = keyword & ((1 << self.action_bits) - 1)
+        key = keyword >> self.action_bits
+        codes = []
+        for b in reversed(self.bits):
+            codes.append(key & ((1 << b) - 1))
+            key >>= b
+        return tuple(reversed(codes)), action
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "fields": [
+                {"name": n, "levels": lv, "bits": b, "shift": s}
+                for n, lv, b, s in zip(self.names, self.levels, self.bits, self.shifts)
+            ],
+            "action_bits": self.action_bits,
+            "n_actions": self.n_actions,
+            "total_bits": self.total_bits,
+        }
+
+
+def compass_code(units: float) -> int:
+    """Compass units 0..255 -> East 0, North 1, West 2, South 3 (boundaries NE/NW/SW/SE).
+
+    >>> [compass_code(u) for u in (0, 31.9, 32.1, 100, 159, 160, 224.1, 255)]
+    [0, 0, 1, 2, 2, 3, 0, 0]
+    """
+    deg = (units / 256.0 * 360.0) % 360.0
+    return int(((deg + 45.0) % 360.0) // 90.0)
+
+
+class Encoder:
+    """Raw readings -> state codes, in keyword order: goal cameras, end-of-world cameras,
+    sonar groups (then the compass when it is in the state).
+
+    A code is the number of thresholds at or below the reading (``bisect_right``): with
+    the paper's sonar thresholds ``[6, 24, 60]``, 5.9 -> 0 Bump, 6 -> 1 Close, 59 -> 2
+    Medium, 60 -> 3 Far. A sonar group's reading is the mean of its sonars. A camera that
+    sees nothing (``None``, infinity) or reads beyond ``max_camera_view`` encodes Far.
+    """
+
+    def __init__(self, enc: dict[str, Any]) -> None:
+        self.sonar_thresholds = [float(t) for t in enc["thresholds"]["sonar"]]
+        self.camera_thresholds = [float(t) for t in enc["thresholds"]["camera"]]
+        self.sonar_groups = [[int(i) for i in g] for g in enc["sonar_groups"]]
+        self.n_sonar = int(enc["n_sonar"])
+        self.n_camera = int(enc["n_camera"])
+        self.max_camera_view = float(enc["max_camera_view"])
+        self.compass_in_state = bool(enc["compass_in_state"])
+
+    def fields(self) -> list[tuple[str, int]]:
+        """``(name, levels)`` of the state fields this encoder produces."""
+        cam = len(self.camera_thresholds) + 1
+        son = len(self.sonar_thresholds) + 1
+        out = [(f"GoalCam{c}", cam) for c in range(self.n_camera)]
+        out += [(f"EoWCam{c}", cam) for c in range(self.n_camera)]
+        out += [("Sonar" + "-".join(str(i) for i in g), son) for g in self.sonar_groups]
+        if self.compass_in_state:
+            out.append(("Compass", 4))
+        return out
+
+    def encode(
+        self,
+        sonar: Sequence[float],
+        goal_cam: Sequence[float | None],
+        eow_cam: Sequence[float | None],
+        compass: float | None = None,
+    ) -> tuple[int, ...]:
+        """The state codes of one set of raw readings (inches from the robot's edge)."""
+        sonar = _numbers(sonar, self.n_sonar, "sonar", allow_none=False)
+        goal = _numbers(goal_cam, self.n_camera, "goal_cam", allow_none=True)
+        eow = _numbers(eow_cam, self.n_camera, "eow_cam", allow_none=True)
+        codes = [self._camera(v) for v in goal] + [self._camera(v) for v in eow]
+        for g in self.sonar_groups:
+            total = 0.0
+            for i in g:
+                total += sonar[i]
+            codes.append(bisect.bisect_right(self.sonar_thresholds, total / len(g)))
+        if self.compass_in_state:
+            if compass is None:
+                raise PolicyError("compass: a reading is needed (the compass is in the state)")
+            codes.append(compass_code(float(compass)))
+        return tuple(codes)
+
+    def _camera(self, v: float | None) -> int:
+        if v is None or v > self.max_camera_view:
+            return len(self.camera_thresholds)
+        return bisect.bisect_right(self.camera_thresholds, v)
+
+    def bump(self, sonar: Sequence[float]) -> bool:
+        """Any single sonar reads Bump (below the first sonar threshold)."""
+        return any(float(v) < self.sonar_thresholds[0] for v in sonar)
+
+    def goal_close(self, goal_cam: Sequence[float | None]) -> bool:
+        """The front camera (camera 0) reads the goal Close."""
+        v = goal_cam[0]
+        return v is not None and v <= self.max_camera_view and v < self.camera_thresholds[0]
+
+
+def _numbers(values: Sequence[Any], n: int, name: str, allow_none: bool) -> list[Any]:
+    vals = list(values)
+    if len(vals) != n:
+        raise PolicyError(f"{name}: expected {n} readings, got {len(vals)}")
+    out: list[Any] = []
+    for i, v in enumerate(vals):
+        if v is None and allow_none:
+            out.append(None)
+            continue
+        try:
+            f = float(v)
+        except (TypeError, ValueError):
+            raise PolicyError(f"{name}[{i}]: not a number: {v!r}") from None
+        if math.isnan(f):
+            raise PolicyError(f"{name}[{i}]: not a number (NaN)")
+        out.append(None if (allow_none and math.isinf(f)) else f)
+    return out
+
+
+class Policy:
+    """A loaded policy: layout, encoder, Q rows, learning settings and metadata.
+
+    ``rows`` maps a state key to its list of ``n_actions`` Q values (as the simulator's
+    sparse table); states never visited have every value at ``q_init``.
+    """
+
+    def __init__(self, doc: dict[str, Any], source: str = "<policy>") -> None:
+        validate_document(doc, source)
+        self.source = source
+        lay = doc["layout"]
+        self.layout = Layout([(f["name"], f["levels"]) for f in lay["fields"]], lay["n_actions"])
+        self.encoder = Encoder(doc["encoding"])
+        self.sensors: dict[str, Any] = doc["sensors"]
+        self.learner: dict[str, float] = dict(doc.get("learner") or {})
+        self.rewards: dict[str, float] = dict(doc.get("rewards") or {})
+        self.q_init = float(doc["q_init"])
+        self.episodes = int(doc["episodes"])
+        self.extra = {k: v for k, v in doc.items() if k not in _KNOWN_KEYS}
+        self.rows: dict[int, list[float]] = {}
+        ab = self.layout.action_bits
+        for e in doc["entries"]:
+            kw = e["keyword"]
+            self.row(kw >> ab)[kw & ((1 << ab) - 1)] = float(e["q"])
+
+    # -- files --------------------------------------------------------------------------
+    @classmethod
+    def load(cls, path: str) -> Policy:
+        """Read and validate a policy file; PolicyError (one line) when it is bad."""
+        try:
+            with open(path, encoding="utf-8") as fh:
+                text = fh.read()
+        except OSError as exc:
+            raise _err(str(path), "", f"cannot read: {exc.strerror}") from None
+        except UnicodeDecodeError:
+            raise _err(str(path), "", "not a policy file (not UTF-8 text)") from None
+        return cls.loads(text, str(path))
+
+    @classmethod
+    def loads(cls, text: str, source: str = "<policy>") -> Policy:
+        try:
+            doc = json.loads(text, parse_constant=_reject_constant)
+        except ValueError as exc:
+            raise _err(source, "", f"not a policy file (invalid JSON: {exc})") from None
+        return cls(doc, source)
+
+    def to_document(self, written_by: str = "robot_runtime") -> dict[str, Any]:
+        """The policy as a version-1 document (entries and greedy actions rebuilt)."""
+        doc: dict[str, Any] = {
+            "format": FORMAT,
+            "version": VERSION,
+            "written_by": written_by,
+            "layout": self.layout.to_json(),
+            "actions": list(ACTION_NAMES[: self.layout.n_actions]),
+            "encoding": encoding_json(self.encoder),
+            "sensors": self.sensors,
+            "learner": self.learner,
+            "rewards": self.rewards,
+            "q_init": self.q_init,
+            "episodes": self.episodes,
+        }
+        doc.update(self.extra)
+        doc.update(rows_json(self.rows, self.layout.action_bits))
+        return doc
+
+    def save(self, path: str, written_by: str = "robot_runtime", backup: bool = True) -> None:
+        """Write the policy atomically; the previous file becomes ``<path>.bak``."""
+        text = dump_document(self.to_document(written_by))
+        if backup and os.path.exists(path):
+            _atomic(path + ".bak", lambda tmp: shutil.copyfile(path, tmp))
+        atomic_write_text(path, text)
+
+    # -- acting and learning ----------------------------------------------------------
+    def encode(
+        self,
+        sonar: Sequence[float],
+        goal_cam: Sequence[float | None],
+        eow_cam: Sequence[float | None],
+        compass: float | None = None,
+    ) -> tuple[int, ...]:
+        """Raw readings -> state codes (see :class:`Encoder`)."""
+        return self.encoder.encode(sonar, goal_cam, eow_cam, compass)
+
+    def state_key(self, codes: Sequence[int]) -> int:
+        if len(codes) != len(self.layout.levels):
+            raise PolicyError(f"state: expected {len(self.layout.levels)} codes, got {len(codes)}")
+        return self.layout.state_key(codes)
+
+    def row(self, state: int) -> list[float]:
+        """The (mutable) Q row of ``state``, created at ``q_init`` when missing."""
+        r = self.rows.get(state)
+        if r is None:
+            r = [self.q_init] * self.layout.n_actions
+            self.rows[state] = r
+        return r
+
+    def q(self, state: int) -> list[float]:
+        """A copy of the Q values of ``state`` (``q_init`` everywhere if never visited)."""
+        r = self.rows.get(state)
+        return list(r) if r is not None else [self.q_init] * self.layout.n_actions
+
+    def greedy_actions(self, state: int) -> list[int]:
+        """Every action of highest Q (all actions for a state never visited)."""
+        r = self.q(state)
+        best = max(r)
+        return [a for a, v in enumerate(r) if v == best]
+
+    def greedy(self, state: int, rng: random.Random | None = None) -> int:
+        """An action of highest Q; ties broken uniformly at random (as the simulator),
+        or the lowest index when ``rng`` is None."""
+        ties = self.greedy_actions(state)
+        if len(ties) == 1 or rng is None:
+            return ties[0]
+        return ties[rng.randrange(len(ties))]
+
+    def act(self, state: int, epsilon: float, rng: random.Random) -> int:
+        """epsilon-greedy: a uniform random action with probability ``epsilon``."""
+        if epsilon > 0.0 and rng.random() < epsilon:
+            return rng.randrange(self.layout.n_actions)
+        return self.greedy(state, rng)
+
+    def update(
+        self,
+        state: int,
+        action: int,
+        reward: float,
+        next_state: int,
+        terminal: bool,
+        alpha: float | None = None,
+        gamma: float | None = None,
+    ) -> float:
+        """Table 11: ``Q += alpha * (reward + gamma * max(NextQ) - Q)``; returns new Q.
+
+        ``max(NextQ)`` is 0 after a terminal step (goal, end of world). ``alpha`` and
+        ``gamma`` default to the file's ``learner`` values.
+        """
+        alpha = float(self.learner["alpha"] if alpha is None else alpha)
+        gamma = float(self.learner["gamma"] if gamma is None else gamma)
+        if not 0 <= action < self.layout.n_actions:
+            raise PolicyError(
+                f"action: {action!r} is not an action (0..{self.layout.n_actions - 1})"
+            )
+        row = self.row(state)
+        if terminal:
+            target = reward
+        else:
+            nxt = self.rows.get(next_state)
+            target = reward + gamma * (max(nxt) if nxt is not None else self.q_init)
+        row[action] += alpha * (target - row[action])
+        return row[action]
+
+    # -- rewards (paper §5.4.7) -------------------------------------------------------
+    def bump(self, sonar: Sequence[float]) -> bool:
+        return self.encoder.bump(sonar)
+
+    def judge(
+        self,
+        action: int,
+        sonar: Sequence[float],
+        goal_cam: Sequence[float | None],
+        end_of_world: bool = False,
+    ) -> tuple[str, float, bool]:
+        """``(event, reward, terminal)`` of a step, first rule that applies: goal (Stop
+        with the front camera reading the goal Close) > end_of_world > bump > by action."""
+        if action == STOP and self.encoder.goal_close(goal_cam):
+            event = "goal"
+        elif end_of_world:
+            event = "end_of_world"
+        elif self.encoder.bump(sonar):
+            event = "bump"
+        else:
+            event = _ACTION_EVENTS[action]
+        if event not in self.rewards:
+            raise PolicyError(f"rewards: no value for {event!r} in the policy file")
+        return event, float(self.rewards[event]), event in ("goal", "end_of_world")
+
+
+def _reject_constant(name: str) -> float:
+    raise ValueError(f"{name} is not allowed")
+
+
+_KNOWN_KEYS = frozenset(
+    (
+        "format",
+        "version",
+        "written_by",
+        "layout",
+        "actions",
+        "encoding",
+        "sensors",
+        "learner",
+        "rewards",
+        "q_init",
+        "episodes",
+        "n_states",
+        "entries",
+        "greedy",
+    )
+)
+
+
+def encoding_json(enc: Encoder) -> dict[str, Any]:
+    """The ``encoding`` section of a document."""
+    return {
+        "thresholds": {"sonar": enc.sonar_thresholds, "camera": enc.camera_thresholds},
+        "sonar_groups": enc.sonar_groups,
+        "n_sonar": enc.n_sonar,
+        "n_camera": enc.n_camera,
+        "max_camera_view": enc.max_camera_view,
+        "compass_in_state": enc.compass_in_state,
+        "levels": {
+            "sonar": list(_level_names(("Bump", "Close", "Medium", "Far"), enc.sonar_thresholds)),
+            "camera": list(_level_names(("Close", "Medium", "Far"), enc.camera_thresholds)),
+        },
+    }
+
+
+def _level_names(names: tuple[str, ...], thresholds: list[float]) -> tuple[str, ...]:
+    n = len(thresholds) + 1
+    return names if len(names) == n else tuple(f"L{i}" for i in range(n))
+
+
+def rows_json(rows: dict[int, list[float]], action_bits: int) -> dict[str, Any]:
+    """``n_states``, ``entries`` (every Q entry by ascending keyword) and ``greedy`` (one
+    action of highest Q per state, the lowest index among equal values)."""
+    entries = []
+    greedy = []
+    for state in sorted(rows):
+        r = rows[state]
+        for a, q in enumerate(r):
+            entries.append({"keyword": (state << action_bits) | a, "q": float(q)})
+        greedy.append({"state": state, "action": r.index(max(r))})
+    return {"n_states": len(rows), "entries": entries, "greedy": greedy}
+
+
+def validate_document(doc: Any, source: str = "<policy>") -> None:
+    """Check a version-1 ``koolio-policy`` document; PolicyError naming the bad item.
+
+    Fields (JSON object):
+
+    * ``format`` ``"koolio-policy"``; ``version`` ``1`` (an integer; a reader refuses
+      versions it does not know); ``written_by`` free text.
+    * ``layout``: ``fields`` (state fields, most significant first, each ``name``,
+      ``levels`` = number of codes, ``bits`` = max(1, ceil(log2 levels)), ``shift`` =
+      its position in the keyword), ``action_bits``, ``n_actions``, ``total_bits``.
+      ``keyword = sum(code_i << shift_i) | action`` (paper Table 12).
+    * ``actions``: action names by index (``Stop, RotateLeft, RotateRight, Forward,
+      Reverse``).
+    * ``encoding``: ``thresholds.sonar`` / ``thresholds.camera`` (inches, increasing; a
+      code is the number of thresholds at or below the reading), ``sonar_groups``
+      (sonar indices averaged into one field, in keyword order), ``n_sonar``,
+      ``n_camera``, ``max_camera_view`` (a camera reading beyond it encodes Far, as does
+      "not seen"), ``compass_in_state``, ``levels`` (names of the codes).
+    * ``sensors``: the simulator's sensor signature (angles, arcs, ranges, thresholds):
+      what the table was learned with; ``koolio-pm train --init-qtable`` refuses a file
+      whose signature differs from the run's.
+    * ``learner``: ``alpha``, ``gamma``, ``epsilon`` defaults for the robot;
+      ``rewards``: the reward of each event (``goal, end_of_world, bump, stop, reverse,
+      turn, forward``).
+    * ``q_init``: the value of a Q entry never visited; ``episodes``: episodes learned so
+      far (simulation + robot); ``n_states``: number of visited states.
+    * ``entries``: ``[{"keyword": K, "q": Q}, ...]``, ascending keywords, every action of
+      every visited state; ``greedy``: ``[{"state": S, "action": A}, ...]`` with
+      ``S = K >> action_bits`` (derived data: rebuilt on every save).
+    """
+    if not isinstance(doc, dict):
+        raise _err(source, "", "not a policy file (not a JSON object)")
+    if doc.get("format") != FORMAT:
+        raise _err(
+            source, "format", "not a {} file (format {!r})".format(FORMAT, doc.get("format"))
+        )
+    version = doc.get("version")
+    if not _is_int(version) or version > VERSION or version < 1:
+        raise _err(
+            source, "version", f"unsupported version {version!r} (this reader knows {VERSION})"
+        )
+    for key in ("layout", "encoding", "sensors", "q_init", "episodes", "entries"):
+        if key not in doc:
+            raise _err(source, key, "missing")
+    _check_layout(doc["layout"], source)
+    _check_encoding(doc, source)
+    if not _is_number(doc["q_init"]):
+        raise _err(source, "q_init", "must be a finite number")
+    if not _is_int(doc["episodes"]) or doc["episodes"] < 0:
+        raise _err(source, "episodes", "must be an integer >= 0")
+    for key in ("learner", "rewards"):
+        sec = doc.get(key) or {}
+        if not isinstance(sec, dict) or not all(_is_number(v) for v in sec.values()):
+            raise _err(source, key, "must map names to finite numbers")
+    _check_entries(doc, source)
+
+
+def _check_layout(lay: Any, source: str) -> None:
+    if not isinstance(lay, dict) or not isinstance(lay.get("fields"), list) or not lay["fields"]:
+        raise _err(source, "layout.fields", "must be a non-empty list")
+    na = lay.get("n_actions")
+    if not _is_int(na) or na < 1:
+        raise _err(source, "layout.n_actions", "must be an integer >= 1")
+    fields = []
+    for i, f in enumerate(lay["fields"]):
+        if not isinstance(f, dict) or not _is_int(f.get("levels")) or f["levels"] < 1:
+            raise _err(source, f"layout.fields[{i}]", "needs name and levels >= 1")
+        fields.append((str(f.get("name")), f["levels"]))
+    expect = Layout(fields, na)
+    for i, f in enumerate(lay["fields"]):
+        for key, want in (("bits", expect.bits[i]), ("shift", expect.shifts[i])):
+            if key in f and f[key] != want:
+                raise _err(source, f"layout.fields[{i}].{key}", f"{f[key]!r}, expected {want}")
+    if "action_bits" in lay and lay["action_bits"] != expect.action_bits:
+        raise _err(
+            source,
+            "layout.action_bits",
+            f"{lay['action_bits']!r}, expected {expect.action_bits}",
+        )
+
+
+def _check_encoding(doc: dict[str, Any], source: str) -> None:
+    enc = doc["encoding"]
+    try:
+        encoder = Encoder(enc)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise _err(source, "encoding", f"missing or malformed item ({exc})") from None
+    for name, ts in (("sonar", encoder.sonar_thresholds), ("camera", encoder.camera_thresholds)):
+        if not ts or any(b <= a for a, b in itertools.pairwise(ts)):
+            raise _err(source, f"encoding.thresholds.{name}", "must be increasing, non-empty")
+    for g in encoder.sonar_groups:
+        if not g or any(not 0 <= i < encoder.n_sonar for i in g):
+            raise _err(source, "encoding.sonar_groups", f"bad group {g!r}")
+    lay = doc["layout"]
+    got = [(str(f["name"]), f["levels"]) for f in lay["fields"]]
+    if got != encoder.fields():
+        raise _err(
+            source, "layout.fields", f"do not match the encoding (expected {encoder.fields()!r})"
+        )
+
+
+def _check_entries(doc: dict[str, Any], source: str) -> None:
+    lay = doc["layout"]
+    layout = Layout([(f["name"], f["levels"]) for f in lay["fields"]], lay["n_actions"])
+    entries = doc["entries"]
+    if not isinstance(entries, list):
+        raise _err(source, "entries", "must be a list")
+    limit = 1 << layout.total_bits
+    amask = (1 << layout.action_bits) - 1
+    seen = set()
+    for i, e in enumerate(entries):
+        item = f"entries[{i}]"
+        if not isinstance(e, dict) or not _is_int(e.get("keyword")) or not _is_number(e.get("q")):
+            raise _err(source, item, "needs an integer keyword and a finite number q")
+        kw = e["keyword"]
+        if not 0 <= kw < limit or (kw & amask) >= layout.n_actions:
+            raise _err(source, item, f"keyword {kw} out of range for the layout")
+        codes, _ = layout.decode(kw)
+        if any(c >= lv for c, lv in zip(codes, layout.levels)):
+            raise _err(source, item, f"keyword {kw} has a code beyond its field's levels")
+        if kw in seen:
+            raise _err(source, item, f"keyword {kw} repeated")
+        seen.add(kw)
+    if not isinstance(doc.get("greedy", []), list):
+        raise _err(source, "greedy", "must be a list")
+
+
+def _is_int(v: Any) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool)
+
+
+def _is_number(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def dump_document(doc: dict[str, Any]) -> str:
+    """JSON text of a document: short values on one line, one entry per line."""
+    return _pretty(doc, "") + "\n"
+
+
+def _pretty(value: Any, pad: str, width: int = 96) -> str:
+    flat = json.dumps(value, allow_nan=False)
+    if not isinstance(value, (dict, list)) or not value or len(pad) + len(flat) <= width:
+        return flat
+    inner = pad + "  "
+    if isinstance(value, dict):
+        items = [f"{inner}{json.dumps(k)}: {_pretty(v, inner, width)}" for k, v in value.items()]
+        return "{\n" + ",\n".join(items) + f"\n{pad}}}"
+    items = [inner + _pretty(v, inner, width) for v in value]
+    return "[\n" + ",\n".join(items) + f"\n{pad}]"
+
+
+def _atomic(path: str, write) -> None:
+    directory = os.path.dirname(os.path.abspath(path))
+    tmp = os.path.join(directory, f".{os.path.basename(path)}.tmp{os.getpid()}")
+    try:
+        write(tmp)
+        with open(tmp, "rb+") as fh:
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+
+
+def atomic_write_text(path: str, text: str) -> None:
+    """Write ``text`` so that a crash leaves either the old or the new file."""
+
+    def write(tmp: str) -> None:
+        with open(tmp, "w", encoding="utf-8", newline="\n") as fh:
+            fh.write(text)
+
+    _atomic(path, write)
+
+
+class EpisodeLog:
+    """Appends one CSV row per episode, in ``koolio-pm train``'s log format."""
+
+    def __init__(self, path: str) -> None:
+        self.path = path
+        new = not os.path.exists(path) or os.path.getsize(path) == 0
+        if new:
+            self._write(list(LOG_FIELDS))
+
+    def _write(self, row: list[str]) -> None:
+        buf = io.StringIO()
+        csv.writer(buf, lineterminator="\n").writerow(row)
+        with open(self.path, "a", encoding="utf-8", newline="") as fh:
+            fh.write(buf.getvalue())
+            fh.flush()
+            os.fsync(fh.fileno())
+
+    def write(
+        self,
+        episode: int,
+        reward: float,
+        steps: int,
+        bumps: int,
+        outcome: str,
+        rescued: bool,
+        epsilon: float,
+        goal: str,
+    ) -> None:
+        self._write(
+            [
+                str(episode),
+                format(reward, ".6g"),
+                str(steps),
+                str(bumps),
+                outcome,
+                str(int(rescued)),
+                format(epsilon, ".6g"),
+                goal,
+            ]
+        )
+
+
+class RobotLearner:
+    """One learning episode at a time on the robot: choose, update, log, save.
+
+    ``epsilon`` (default: the file's ``learner.epsilon``) sets exploration; ``learn``
+    False runs the greedy policy without updates (``epsilon`` then defaults to 0).
+    Outcomes for :meth:`end`: ``goal``, ``end_of_world``, ``truncated`` or
+    ``interrupted``, as in the simulator's log.
+    """
+
+    def __init__(
+        self,
+        policy: Policy,
+        save_path: str | None = None,
+        log_path: str | None = None,
+        epsilon: float | None = None,
+        seed: int | None = None,
+        learn: bool = True,
+        goal: str = "",
+    ) -> None:
+        self.policy = policy
+        self.save_path = save_path
+        self.log = EpisodeLog(log_path) if log_path else None
+        default_eps = float(policy.learner.get("epsilon", 0.0)) if learn else 0.0
+        self.epsilon = default_eps if epsilon is None else float(epsilon)
+        self.rng = random.Random(seed)
+        self.learn = learn
+        self.goal = goal
+        self.state: int | None = None
+
+    def begin(self, codes: Sequence[int]) -> None:
+        """Start an episode from the first state's codes."""
+        self.state = self.policy.state_key(codes)
+        self.reward = 0.0
+        self.steps = 0
+        self.bumps = 0
+        self.rescued = False
+
+    def choose(self) -> int:
+        if self.state is None:
+            raise PolicyError("choose: call begin() first")
+        return self.policy.act(self.state, self.epsilon, self.rng)
+
+    def step(
+        self,
+        action: int,
+        reward: float,
+        next_codes: Sequence[int],
+        terminal: bool,
+        bump: bool = False,
+        rescued: bool = False,
+    ) -> None:
+        """Record one real transition (and learn from it)."""
+        if self.state is None:
+            raise PolicyError("step: call begin() first")
+        nxt = self.policy.state_key(next_codes)
+        if self.learn:
+            self.policy.update(self.state, action, reward, nxt, terminal)
+        self.state = nxt
+        self.reward += reward
+        self.steps += 1
+        self.bumps += int(bump)
+        self.rescued = self.rescued or rescued
+
+    def end(self, outcome: str) -> None:
+        """Finish the episode: count it, write its log row, save the table atomically."""
+        episode = self.policy.episodes
+        self.policy.episodes += 1
+        if self.log is not None:
+            self.log.write(
+                episode,
+                self.reward,
+                self.steps,
+                self.bumps,
+                outcome,
+                self.rescued,
+                self.epsilon,
+                self.goal,
+            )
+        if self.save_path and self.learn:
+            self.policy.save(self.save_path)
+        self.state = None
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python robot_runtime.py POLICY``: check a policy file and print a summary."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    if len(args) != 1 or args[0].startswith("-"):
+        print("usage: python robot_runtime.py POLICY", file=sys.stderr)
+        return 2
+    try:
+        p = Policy.load(args[0])
+    except PolicyError as exc:
+        print(f"robot_runtime: error: {exc}", file=sys.stderr)
+        return 2
+    lay = p.layout
+    keyword = " | ".join(f"{n}<<{s}" for n, s in zip(lay.names, lay.shifts))
+    enc = p.encoder
+    print(f"{args[0]}: {FORMAT} version {VERSION}, {len(p.rows)} states, {p.episodes} episodes")
+    print(f"keyword ({lay.total_bits} bits): {keyword} | Action")
+    print(f"sonar thresholds {enc.sonar_thresholds}, camera thresholds {enc.camera_thresholds}")
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,205 @@
+"""robot_runtime.py: standard library only, exact round trips, same maths and log as train."""
+
+from __future__ import annotations
+
+import json
+import random
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from koolio_pymunk import robot_runtime as rt
+from koolio_pymunk.config import Config, LearnerConfig, RewardConfig, SensorConfig
+from koolio_pymunk.export import policy_document, write_policy
+from koolio_pymunk.learner import QLearner
+from koolio_pymunk.qtable import KeywordLayout, QTable
+from koolio_pymunk.rules import judge
+from koolio_pymunk.sensors import state_fields
+from koolio_pymunk.training import LOG_FIELDS, EpisodeResult, LogWriter, sensor_signature
+
+RUNTIME = Path(rt.__file__)
+
+
+def _table(n_states: int = 200, seed: int = 0) -> QTable:
+    """A table with random (awkward) float values over valid states of the paper layout."""
+    layout = KeywordLayout(tuple(state_fields(SensorConfig())))
+    rng = np.random.default_rng(seed)
+    table = QTable(layout, {"sensors": sensor_signature(Config()), "episodes": 7})
+    for _ in range(n_states):
+        codes = [int(rng.integers(lv)) for _, lv in layout.fields]
+        table.row(layout.state_key(codes))[:] = (rng.normal(size=5) * 37.1).tolist()
+    return table
+
+
+@pytest.fixture
+def policy_file(tmp_path) -> Path:
+    path = tmp_path / "policy.json"
+    write_policy(policy_document(_table()), path)
+    return path
+
+
+def test_runtime_imports_with_the_standard_library_only(policy_file, tmp_path):
+    """An isolated interpreter without site-packages (-I -S) loads and runs the file."""
+    script = f"""
+import importlib.util, json, random, sys
+spec = importlib.util.spec_from_file_location("robot_runtime", {str(RUNTIME)!r})
+rt = importlib.util.module_from_spec(spec)
+sys.modules["robot_runtime"] = rt
+spec.loader.exec_module(rt)
+p = rt.Policy.load({str(policy_file)!r})
+codes = p.encode([30.0] * 8, [None, 50.0, 200.0], [None] * 3)
+s = p.state_key(codes)
+learner = rt.RobotLearner(p, save_path={str(tmp_path / "saved.json")!r},
+                          log_path={str(tmp_path / "robot.csv")!r}, seed=1, goal="302")
+learner.begin(codes)
+a = learner.choose()
+learner.step(a, -1.0, codes, False)
+learner.end("truncated")
+foreign = sorted(m for m in sys.modules
+                 if m.split(".")[0] not in sys.stdlib_module_names
+                 and m not in ("__main__", "robot_runtime"))
+print(json.dumps({{"codes": codes, "foreign": foreign, "numpy": "numpy" in sys.modules,
+                  "path": [x for x in sys.path if "site-packages" in x]}}))
+"""
+    out = subprocess.run(
+        [sys.executable, "-I", "-S", "-c", script],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert out.returncode == 0, out.stderr
+    result = json.loads(out.stdout)
+    assert result == {
+        "codes": [2, 1, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2],
+        "foreign": [],
+        "numpy": False,
+        "path": [],
+    }
+    assert (tmp_path / "saved.json").exists() and (tmp_path / "robot.csv").exists()
+    # and the source names no third-party or package import
+    src = RUNTIME.read_text()
+    assert "import numpy" not in src and "koolio_pymunk" not in src.split('"""', 2)[2]
+
+
+def test_round_trip_load_update_save_load_is_exact(policy_file, tmp_path):
+    p = rt.Policy.load(str(policy_file))
+    rng = random.Random(4)
+    states = list(p.rows)
+    for _ in range(500):
+        s, s2 = rng.choice([*states, 0]), rng.choice([*states, 1])
+        p.update(s, rng.randrange(5), rng.uniform(-10, 10) / 3, s2, rng.random() < 0.1)
+    p.episodes += 1
+    out = tmp_path / "saved.json"
+    p.save(str(out))
+    q = rt.Policy.load(str(out))
+    assert q.rows == p.rows and len(q.rows) == len(states) + 1
+    assert (q.episodes, q.q_init, q.sensors, q.learner, q.rewards) == (
+        p.episodes,
+        p.q_init,
+        p.sensors,
+        p.learner,
+        p.rewards,
+    )
+    q.save(str(tmp_path / "again.json"))
+    assert (tmp_path / "again.json").read_text() == out.read_text()
+
+
+def test_save_is_atomic_and_keeps_a_backup(policy_file):
+    before = policy_file.read_text()
+    p = rt.Policy.load(str(policy_file))
+    p.update(next(iter(p.rows)), 0, 1.0, 0, True)
+    p.save(str(policy_file))
+    assert Path(str(policy_file) + ".bak").read_text() == before
+    assert policy_file.read_text() != before
+    assert sorted(x.name for x in policy_file.parent.iterdir()) == [
+        "policy.json",
+        "policy.json.bak",
+    ]
+
+
+def test_update_is_bit_identical_to_the_simulators_learner(policy_file):
+    table = _table()
+    p = rt.Policy.load(str(policy_file))
+    assert p.rows == table.rows
+    agent = QLearner(table, LearnerConfig(alpha=0.2, gamma=0.97), np.random.default_rng(0))
+    rng = random.Random(9)
+    states = [*list(table.rows), 99, 100]
+    for _ in range(2000):
+        args = (rng.choice(states), rng.randrange(5), rng.uniform(-20, 20), rng.choice(states))
+        term = rng.random() < 0.05
+        assert p.update(*args, term, alpha=0.2, gamma=0.97) == agent.update(*args, term)
+    assert p.rows == table.rows
+
+
+def test_judge_matches_the_simulators_rules(policy_file):
+    p = rt.Policy.load(str(policy_file))
+    for action in range(5):
+        for goal in (None, 10.0, 35.99, 36.0, 500.0):
+            for eow in (False, True):
+                for sonar0 in (5.0, 6.0, 100.0):
+                    sonar = [sonar0] + [80.0] * 7
+                    event, reward, term = p.judge(action, sonar, [goal, None, None], eow)
+                    j = judge(
+                        action, goal is not None and goal < 36, eow, sonar0 < 6, RewardConfig()
+                    )
+                    assert (event, reward, term) == (j.event, j.reward, j.terminated)
+
+
+def test_episode_log_has_the_train_log_format(policy_file, tmp_path):
+    p = rt.Policy.load(str(policy_file))
+    learner = rt.RobotLearner(p, log_path=str(tmp_path / "robot.csv"), epsilon=0.05, goal="304")
+    codes = (0,) * 12
+    learner.begin(codes)
+    for k in range(3):
+        learner.step(learner.choose(), -1.25, codes, k == 2, bump=k == 1)
+    learner.end("goal")
+    sim = tmp_path / "sim.csv"
+    w = LogWriter(sim)
+    w.write(EpisodeResult(7, -3.75, 3, 1, "goal", False, 0.05, "304"))
+    w.close()
+    assert rt.LOG_FIELDS == LOG_FIELDS
+    assert (tmp_path / "robot.csv").read_text() == sim.read_text()
+    assert p.episodes == 8
+
+
+def test_greedy_learner_does_not_update_or_save(policy_file, tmp_path):
+    p = rt.Policy.load(str(policy_file))
+    before = {k: list(v) for k, v in p.rows.items()}
+    learner = rt.RobotLearner(p, save_path=str(tmp_path / "x.json"), learn=False)
+    assert learner.epsilon == 0.0
+    state = next(iter(p.rows))
+    learner.begin(p.layout.decode(state << 3)[0])
+    a = learner.choose()
+    assert a in p.greedy_actions(state)
+    learner.step(a, 50.0, p.layout.decode(state << 3)[0], True)
+    learner.end("goal")
+    assert p.rows == before and not (tmp_path / "x.json").exists()
+
+
+@pytest.mark.parametrize(
+    ("call", "message"),
+    [
+        (lambda p: p.encode([1.0] * 7, [None] * 3, [None] * 3), "sonar: expected 8 readings"),
+        (lambda p: p.encode([1.0] * 8, [None, "x", 1], [None] * 3), "goal_cam[1]: not a number"),
+        (lambda p: p.encode([float("nan")] * 8, [None] * 3, [None] * 3), "sonar[0]: not a"),
+        (lambda p: p.state_key((0, 1)), "state: expected 12 codes, got 2"),
+        (lambda p: p.update(0, 5, 1.0, 0, True), "action: 5 is not an action (0..4)"),
+    ],
+)
+def test_bad_arguments_raise_policy_errors(policy_file, call, message):
+    p = rt.Policy.load(str(policy_file))
+    with pytest.raises(rt.PolicyError) as info:
+        call(p)
+    assert message in str(info.value)
+
+
+def test_summary_command(policy_file, capsys):
+    assert rt.main([str(policy_file)]) == 0
+    out = capsys.readouterr().out
+    assert "koolio-policy version 1, 200 states, 7 episodes" in out
+    assert "GoalCam0<<25" in out and "Sonar7<<3 | Action" in out
+    assert rt.main([str(policy_file) + ".missing"]) == 2
