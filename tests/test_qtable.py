@@ -87,7 +87,7 @@ def test_bytes_round_trip_exact_and_canonical() -> None:
 def test_truncated_file_is_reported(tmp_path, cut: int) -> None:
     p = tmp_path / "q.qtable"
     p.write_bytes(_table().to_bytes()[:-cut])
-    with pytest.raises(QTableError, match="q.qtable"):
+    with pytest.raises(QTableError, match=r"q\.qtable"):
         load_qtable(p)
 
 
@@ -158,7 +158,7 @@ def test_layout_mismatch_is_refused_not_overwritten(tmp_path) -> None:
     other = KeywordLayout(LAYOUT.fields[:-1])
     with pytest.raises(QTableError, match="layout: table made for 27-bit keyword"):
         QTableStore(store.path).open(other, SENSORS, 0.0)
-    with pytest.raises(QTableError, match="sensors.sonar_arc_deg"):
+    with pytest.raises(QTableError, match=r"sensors\.sonar_arc_deg"):
         QTableStore(store.path).open(LAYOUT, {"sonar_arc_deg": 60.0}, 0.0)
     assert store.path.read_bytes() == before
 

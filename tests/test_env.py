@@ -1,0 +1,186 @@
+"""KoolioEnv: Gymnasium API, spaces, info, events, rescue, determinism."""
+
+from __future__ import annotations
+
+import math
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import koolio_pymunk  # noqa: F401  (registers the env)
+from koolio_pymunk import KoolioEnv
+from koolio_pymunk.config import Config
+from koolio_pymunk.errors import KoolioError
+from koolio_pymunk.rules import TERMS
+from koolio_pymunk.world import Action
+
+
+def quiet_config(**episode) -> Config:
+    cfg = Config()
+    cfg.sensors.noise.model = "none"
+    for k, v in episode.items():
+        setattr(cfg.episode, k, v)
+    return cfg
+
+
+def test_check_env_passes() -> None:
+    env = KoolioEnv("room")
+    check_env(env, skip_render_check=True)
+
+
+def test_gym_make_registered_hallway() -> None:
+    env = gym.make("koolio_pymunk/Hallway-v0")
+    obs, info = env.reset(seed=1)
+    assert env.action_space == gym.spaces.Discrete(5)
+    assert env.observation_space == gym.spaces.MultiDiscrete([3] * 6 + [4] * 6)
+    assert obs.shape == (12,) and env.observation_space.contains(obs)
+    assert info["pose"][:2] == (72.0, 44.0)
+    assert info["goal"] == env.unwrapped.arena.active_goal
+    env.close()
+
+
+def test_step_info_has_everything_the_issue_names() -> None:
+    env = KoolioEnv("hallway")
+    env.reset(seed=0)
+    obs, reward, _, _, info = env.step(int(Action.FORWARD))
+    for key in (
+        "pose",
+        "sonar",
+        "goal_cam",
+        "eow_cam",
+        "state_key",
+        "keyword",
+        "event",
+        "rescued",
+        "has_been_rescued",
+        "reward_terms",
+    ):
+        assert key in info
+    assert len(info["pose"]) == 3 and len(info["sonar"]) == 8 and len(info["goal_cam"]) == 3
+    assert set(info["reward_terms"]) == set(TERMS)
+    assert info["reward_terms"][info["event"]] == reward
+    assert env.layout.decode(info["keyword"])[1] == Action.FORWARD
+    assert info["state_key"] == env.layout.state_key(tuple(obs))
+
+
+def test_exploring_starts_random_heading_and_seeded() -> None:
+    env = KoolioEnv("hallway")
+    headings = set()
+    for seed in range(5):
+        _, info = env.reset(seed=seed)
+        headings.add(round(info["pose"][2], 9))
+    assert len(headings) == 5
+    _, a = env.reset(seed=3)
+    _, b = env.reset(seed=3)
+    assert a["pose"] == b["pose"] and a["sonar"] == b["sonar"]
+
+
+def test_same_seed_same_trajectory() -> None:
+    def run() -> list:
+        env = KoolioEnv("obstacles")
+        env.reset(seed=11)
+        rng = np.random.default_rng(0)
+        out = []
+        for _ in range(200):
+            obs, r, te, tr, info = env.step(int(rng.integers(5)))
+            out.append((tuple(obs), r, info["pose"]))
+            if te or tr:
+                env.reset()
+        return out
+
+    assert run() == run()
+
+
+def test_goal_event_needs_stop_and_front_camera_close() -> None:
+    env = KoolioEnv("hallway", config=quiet_config())
+    gx, gy = env.world_arena.goal().at
+    # Face the plate from 30 in away (edge distance 20 < 36: Close).
+    env.reset(seed=0, options={"heading": -math.pi / 2})
+    env.world.place(0, (gx, gy + 30), -math.pi / 2)
+    _, r, te, _, info = env.step(int(Action.ROTATE_LEFT))
+    assert not te and info["event"] == "turn"
+    env.world.place(0, (gx, gy + 30), -math.pi / 2)
+    _, r, te, _, info = env.step(int(Action.STOP))
+    assert te and info["event"] == "goal" and r == env.config.rewards.goal
+    assert info["goal_cam"][0] == pytest.approx(20.0)
+
+
+def test_end_of_world_event() -> None:
+    env = KoolioEnv("hallway", config=quiet_config())
+    env.reset(seed=0)
+    env.world.place(0, (6.0, 44.0), math.pi)  # 12 in forward crosses x = 0 into the zone
+    _, r, te, _, info = env.step(int(Action.FORWARD))
+    assert te and info["event"] == "end_of_world" and r == env.config.rewards.end_of_world
+
+
+def test_bump_event_and_counter() -> None:
+    env = KoolioEnv("hallway", config=quiet_config())
+    env.reset(seed=0)
+    env.world.place(0, (400.0, 20.0), -math.pi / 2)  # 10 in from the south wall's edge
+    _, r, _, _, info = env.step(int(Action.FORWARD))
+    assert info["event"] == "bump" and r == env.config.rewards.bump and info["bumps"] == 1
+
+
+def test_truncation_at_step_cap() -> None:
+    env = KoolioEnv("room", config=quiet_config(max_steps=5))
+    env.reset(seed=0)
+    flags = [env.step(int(Action.ROTATE_LEFT))[2:4] for _ in range(5)]
+    assert flags == [(False, False)] * 4 + [(False, True)]
+
+
+def test_forced_rescue_spins_and_marks_episode() -> None:
+    env = KoolioEnv("hallway", config=quiet_config())
+    env.reset(seed=0)
+    env.world.place(0, (400.0, 44.0), 0.0)
+    _, info = env.rescue()
+    assert info["rescued"] and info["has_been_rescued"]
+    assert info["pose"][2] != 0.0
+    assert info["pose"][0] <= 400.0 + 1e-9  # only reverses along heading 0
+
+
+def test_auto_rescue_fires_on_bump_past_limit() -> None:
+    cfg = quiet_config()
+    cfg.rescue.max_steps_before_rescue = 2
+    cfg.rescue.rescue_chance = 1.0
+    env = KoolioEnv("hallway", config=cfg)
+    env.reset(seed=0)
+    env.world.place(0, (400.0, 11.0), -math.pi / 2)  # touching the south wall
+    events = [env.step(int(Action.FORWARD))[4] for _ in range(3)]
+    assert [i["rescued"] for i in events] == [False, False, True]
+    assert events[2]["event"] == "bump" and events[2]["has_been_rescued"]
+    cfg.rescue.auto_rescue_toggle = False
+    env.reset(seed=0)
+    env.world.place(0, (400.0, 11.0), -math.pi / 2)
+    assert not any(env.step(int(Action.FORWARD))[4]["rescued"] for _ in range(4))
+
+
+def test_goal_option_and_unknown_goal() -> None:
+    env = KoolioEnv("hallway")
+    names = env.arena.goal_names()
+    _, info = env.reset(seed=0, options={"goal": names[0]})
+    assert info["goal"] == names[0]
+    with pytest.raises(KoolioError, match="no goal named 'nope'"):
+        KoolioEnv("hallway", goal="nope")
+
+
+def test_random_goal_draws_every_goal() -> None:
+    env = KoolioEnv("hallway", goal="random")
+    seen = {env.reset(seed=s)[1]["goal"] for s in range(200)}
+    assert seen == set(env.arena.goal_names())
+
+
+def test_core_does_not_import_pygame() -> None:
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, koolio_pymunk; from koolio_pymunk.training import train; "
+        "from koolio_pymunk import cli; cli.build_parser(); "
+        "print('pygame' in sys.modules, 'matplotlib' in sys.modules)"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    ).stdout.strip()
+    assert out == "False False"
