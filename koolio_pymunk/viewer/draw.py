@@ -58,7 +58,8 @@ ROBOT_GOAL: Color = (0, 0, 0)
 """Paper: black at the goal."""
 HEADING: Color = (255, 255, 255)
 SONAR_LINE: Color = (0, 0, 0)
-SONAR_CONE: Color = (200, 200, 200)
+SONAR_MISS: Color = (205, 205, 205)
+"""A sonar sub-arc ray that hits nothing within range (drawn to its full length)."""
 CAMERA_GOAL_LINE: Color = (0, 70, 255)
 """Paper: blue from a camera that sees the goal."""
 CAMERA_EOW_LINE: Color = (235, 200, 0)
@@ -245,7 +246,8 @@ def draw_sensors(
     suite: SensorSuite,
     readings: Readings,
 ) -> None:
-    """Sensor lines (paper §5.4.5): black sonar sub-arc rays to their hits, a blue line
+    """Sensor lines (paper §5.4.5): black sonar sub-arc rays to their hits (light grey
+    to full range when nothing is hit), a blue line
     from each camera that sees the goal, a yellow one from each camera that sees an
     end-of-world marker (to the marker it sees). Draw the robot afterwards, on top."""
     x, y, h = pose
@@ -254,9 +256,11 @@ def draw_sensors(
     dist = readings.rays
     cos, sin = np.cos(angles), np.sin(angles)
     ex, ey = x + dist * cos, y + dist * sin
+    reach = suite.ray_length - 1e-9
     for idx in np.ndindex(angles.shape):
         end = camera.to_screen((float(ex[idx]), float(ey[idx])))
-        pygame.draw.line(surface, SONAR_LINE, c, end, width=1)
+        colour = SONAR_LINE if dist[idx] < reach else SONAR_MISS
+        pygame.draw.line(surface, colour, c, end, width=1)
     far = suite.far
     width = max(2, camera.scale(1.0))
     for cam in range(suite.n_camera):
