@@ -35,10 +35,16 @@ from .qtable import QTable, QTableStore, load_qtable
 LOG_FIELDS = ("episode", "reward", "steps", "bumps", "outcome", "rescued", "epsilon", "goal")
 
 
-def episode_seeds(seed: int, episode: int) -> tuple[int, np.random.Generator]:
+#: Seed streams: training and evaluation episodes of the same seed never share starts.
+TRAIN_STREAM, EVAL_STREAM = 0, 1
+
+
+def episode_seeds(
+    seed: int, episode: int, stream: int = TRAIN_STREAM
+) -> tuple[int, np.random.Generator]:
     """The environment seed and the learner's generator for ``episode`` of run ``seed``."""
-    env_seed = int(np.random.SeedSequence([seed, episode]).generate_state(1)[0])
-    return env_seed, np.random.default_rng([seed, episode, 1])
+    env_seed = int(np.random.SeedSequence([seed, episode, stream]).generate_state(1)[0])
+    return env_seed, np.random.default_rng([seed, episode, stream, 1])
 
 
 def sensor_signature(cfg: Config) -> dict[str, Any]:
@@ -292,7 +298,7 @@ def evaluate(
     rewards: list[float] = []
     options = {"goal": goal} if goal else None
     for e in range(episodes):
-        env_seed, agent.rng = episode_seeds(seed, e)
+        env_seed, agent.rng = episode_seeds(seed, e, EVAL_STREAM)
         env.reset(seed=env_seed, options=options)
         reward, n, outcome = run_episode(env, agent, learn=False)
         outcomes.append(outcome)
