@@ -171,6 +171,8 @@ def run(args: argparse.Namespace) -> int:
     from ..env import KoolioEnv
     from .session import Session
 
+    if args.steps is None and args.episodes is None and _headless():
+        raise KoolioError("view: headless (SDL_VIDEODRIVER=dummy) needs --steps N or --episodes N")
     env = KoolioEnv(arena=args.arena, config=args.config, goal=args.goal)
     session = Session(
         env,
@@ -191,10 +193,6 @@ def run(args: argparse.Namespace) -> int:
             max_steps=args.steps,
             screenshot_every=every,
         )
-        if app.headless and args.steps is None and args.episodes is None:
-            raise KoolioError(
-                "view: headless (SDL_VIDEODRIVER=dummy) needs --steps N or --episodes N"
-            )
         app.run()
         if args.screenshot:
             app.draw()
@@ -212,6 +210,14 @@ def run(args: argparse.Namespace) -> int:
             session.exit(save=not args.discard_unfinished)
         _quit_pygame()
     return 0
+
+
+def _headless() -> bool:
+    """True when SDL draws to no screen (``SDL_VIDEODRIVER=dummy`` or ``offscreen``)."""
+    import pygame
+
+    pygame.display.init()
+    return pygame.display.get_driver() in ("dummy", "offscreen")
 
 
 def _quit_pygame() -> None:
@@ -303,7 +309,7 @@ class ViewerApp:
         pygame.display.set_caption(
             "Koolio (pymunk): " + ("greedy" if not session.learn else "learning")
         )
-        self.headless = pygame.display.get_driver() in ("dummy", "offscreen")
+        self.headless = _headless()
         self.session = session
         self.env = session.env
         self.size = size
@@ -429,8 +435,8 @@ class ViewerApp:
         info = [
             "mode: " + ("learning" if s.learn else "greedy (table read-only)"),
             f"arena: {self.env.arena.name}  seed: {s.seed}",
-            f"table: {_short(str(s.store.path) if s.store else 'read-only')}",
-            f"log: {_short(str(s.log.path) if s.log.path else '-')}",
+            "table: " + _short(str(s.store.path) if s.store else "read-only", 21),
+            "log: " + _short(str(s.log.path) if s.log.path else "-", 23),
         ]
         for line in info:
             if row[0] + 20 > h - 4:

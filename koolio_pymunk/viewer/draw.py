@@ -10,8 +10,8 @@ the world, black at the goal; black sonar lines, blue lines from cameras that se
 goal, yellow lines from cameras that see an end-of-world marker; goal and end-of-world
 markers are coloured dots.
 
-pygame must be initialised by the caller (``pygame.display.init()`` for surfaces,
-``pygame.font.init()`` for labels).
+Drawing on a plain ``pygame.Surface`` needs no display; :func:`font` initialises
+``pygame.font`` on first use.
 """
 
 from __future__ import annotations
@@ -77,9 +77,11 @@ _FONTS: dict[int, pygame.font.Font] = {}
 
 
 def font(size: int) -> pygame.font.Font:
-    """The bundled pygame font at ``size`` pixels (cached; needs ``pygame.font.init()``)."""
+    """The bundled pygame font at ``size`` pixels (cached; initialises pygame.font)."""
     f = _FONTS.get(size)
     if f is None:
+        if not pygame.font.get_init():
+            pygame.font.init()
         f = _FONTS[size] = pygame.font.Font(None, size)
     return f
 

@@ -1,0 +1,97 @@
+"""``koolio-pm plot``: reading training logs and drawing the learning curve."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+pytest.importorskip("matplotlib")
+
+from koolio_pymunk.cli import main
+from koolio_pymunk.errors import KoolioError
+from koolio_pymunk.plotting import moving_average, outcome_rate, read_log
+
+HEADER = "episode,reward,steps,bumps,outcome,rescued,epsilon,goal\n"
+
+
+def write_log(path, n: int = 60) -> None:
+    rows = [HEADER]
+    for e in range(n):
+        outcome = "goal" if e % 3 == 0 else "end_of_world"
+        rows.append(f"{e},{-100 + 2 * e},{200 - e},{e % 5},{outcome},0,0.1,311\n")
+    rows.append(f"{n},-5,3,0,interrupted,0,0.1,311\n")
+    path.write_text("".join(rows))
+
+
+def test_read_log_skips_interrupted_rows(tmp_path) -> None:
+    p = tmp_path / "train.csv"
+    write_log(p, 10)
+    log = read_log(p)
+    assert len(log) == 10 and log.skipped == 1
+    assert log.reward.tolist() == [-100 + 2 * e for e in range(10)]
+    assert log.outcome[:3] == ["goal", "end_of_world", "end_of_world"]
+
+
+def test_moving_average_and_outcome_rate() -> None:
+    assert moving_average(np.array([1.0, 2.0, 3.0, 4.0, 5.0]), 3).tolist() == [
+        1.0,
+        1.5,
+        2.0,
+        3.0,
+        4.0,
+    ]
+    rate = outcome_rate(["goal", "x", "goal", "goal"], "goal", 2)
+    assert rate.tolist() == [1.0, 0.5, 0.5, 1.0]
+
+
+def test_plot_writes_a_labelled_png(tmp_path, capsys) -> None:
+    log = tmp_path / "train.csv"
+    write_log(log)
+    out = tmp_path / "curve.png"
+    assert main(["plot", "--log", str(log), "--out", str(out), "--window", "10"]) == 0
+    import matplotlib.image as mpimg
+
+    img = mpimg.imread(out)
+    assert img.shape[0] > 700 and img.shape[1] > 1000
+    # Not a blank picture: the tab:blue moving-average line is drawn.
+    blue = np.all(np.abs(img[:, :, :3] - np.array([31, 119, 180]) / 255) < 0.02, axis=2)
+    assert blue.sum() > 500
+    assert "60 episodes" in capsys.readouterr().out
+
+
+def test_plot_overlays_several_logs(tmp_path) -> None:
+    a, b = tmp_path / "a.csv", tmp_path / "b.csv"
+    write_log(a, 30)
+    write_log(b, 40)
+    out = tmp_path / "both.png"
+    assert main(["plot", "--log", str(a), "--log", str(b), "--out", str(out)]) == 0
+    assert out.stat().st_size > 10_000
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (None, "file not found"),
+        ("a,b\n1,2\n", "missing columns"),
+        (HEADER, "no finished episode"),
+        (HEADER + "0,lots,5,0,goal,0,0.1,311\n", "line 2: reward: not a number"),
+    ],
+)
+def test_bad_logs_are_one_line_errors(tmp_path, content, message) -> None:
+    p = tmp_path / "log.csv"
+    if content is not None:
+        p.write_text(content)
+    with pytest.raises(KoolioError, match=message):
+        read_log(p)
+
+
+def test_plot_cli_errors_exit_2(tmp_path, capsys) -> None:
+    assert (
+        main(["plot", "--log", str(tmp_path / "none.csv"), "--out", str(tmp_path / "c.png")]) == 2
+    )
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "file not found" in err
+    log = tmp_path / "t.csv"
+    write_log(log, 5)
+    assert main(["plot", "--log", str(log), "--out", str(tmp_path / "c.jpg")]) == 2
+    assert main(["plot", "--log", str(log), "--out", str(tmp_path / "c.png"), "--window", "0"]) == 2
