@@ -14,7 +14,8 @@ and saves it, logging an ``interrupted`` row, like Ctrl-C in ``train``; Exit Wit
 (``save=False``) leaves the table file as it was after the last finished episode.
 
 With ``greedy=True`` the session only watches: epsilon 0, no updates, nothing written
-(the table file must exist).
+(the table file must exist); its episodes are those of ``koolio-pm eval`` with the same
+seed (the evaluation seed stream).
 
 An episode that ends is saved at once, but the environment is reset lazily at the next
 step, so a viewer can still draw the final state (robot black at the goal, purple past
@@ -35,7 +36,14 @@ from ..env import KoolioEnv
 from ..errors import KoolioError, located
 from ..learner import QLearner
 from ..qtable import QTable, QTableStore, check_compatible, load_qtable
-from ..training import EpisodeResult, LogWriter, episode_seeds, sensor_signature
+from ..training import (
+    EVAL_STREAM,
+    TRAIN_STREAM,
+    EpisodeResult,
+    LogWriter,
+    episode_seeds,
+    sensor_signature,
+)
 
 
 @dataclass
@@ -140,7 +148,8 @@ class Session:
 
     # -- stepping ------------------------------------------------------------------------
     def _begin(self) -> None:
-        env_seed, self.agent.rng = episode_seeds(self.seed, self.episode)
+        stream = TRAIN_STREAM if self.learn else EVAL_STREAM
+        env_seed, self.agent.rng = episode_seeds(self.seed, self.episode, stream)
         if self.learn:
             self.agent.set_episode(self.episode)
         else:
