@@ -1,0 +1,485 @@
+"""Drawing the editor: the arena (the viewer's :func:`~koolio_pymunk.viewer.draw.draw_arena`)
+and the editor's own things over it: grid, handles, selection, the validator's highlight,
+segment lengths, the test-drive robot and its sensors, the side panel and the status bar.
+
+Every world <-> screen conversion goes through the app's
+:class:`~koolio_pymunk.viewer.camera.Camera`.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import pygame
+
+from ..arena import Arena, Point
+from ..viewer import draw
+from ..viewer.camera import Camera
+from . import items
+from .items import Path
+
+if TYPE_CHECKING:
+    from .app import EditorApp
+
+# -- palette (the arena's own colours are the viewer's) --------------------------------------
+PANEL_BG = (36, 40, 48)
+PANEL_TEXT = (226, 230, 236)
+PANEL_DIM = (150, 158, 170)
+PANEL_HOT = (255, 214, 90)
+STATUS_BG = (246, 246, 242)
+STATUS_TEXT = (30, 34, 40)
+OK = (0, 130, 60)
+ERROR = (205, 0, 0)
+ERROR_SOFT = (255, 150, 150)
+SELECT = (0, 170, 210)
+HOVER = (60, 120, 255)
+HANDLE_WALL = (40, 44, 52)
+HANDLE_OBSTACLE = (90, 94, 104)
+HANDLE_ZONE = (150, 80, 190)
+LENGTH_BG = (255, 255, 255)
+LENGTH_TEXT = (70, 70, 90)
+GRID_MINOR = (0, 0, 0, 26)
+GRID_MAJOR = (0, 0, 0, 52)
+GRID_AXIS = (0, 0, 200, 90)
+RUBBER = (0, 150, 200)
+
+FONT = 20
+SMALL = 17
+LINE = 21
+
+
+def text(surface: pygame.Surface, s: str, pos: tuple[int, int], colour, size: int = FONT) -> int:
+    """Blit one line of text; returns its width."""
+    img = draw.font(size).render(s, True, colour)
+    surface.blit(img, pos)
+    return img.get_width()
+
+
+def fmt_len(inches: float, tile: float) -> str:
+    """``96 in = 4 tiles`` (tiles to 2 decimals)."""
+    return f"{inches:.4g} in = {_num(inches / tile)} tiles"
+
+
+def _num(x: float) -> str:
+    return f"{x:.2f}".rstrip("0").rstrip(".")
+
+
+# =========================================================================================
+# Frame
+# =========================================================================================
+def draw_frame(app: EditorApp) -> None:
+    """Draw the whole window."""
+    draw_canvas(app)
+    draw_panel(app)
+    draw_status(app)
+
+
+def draw_canvas(app: EditorApp) -> None:
+    surface, cam = app.screen, app.camera
+    arena = app.model.arena
+    drive = app.drive
+    shown = arena.to_world() if drive is not None else arena
+    draw.draw_arena(surface, _drawable(shown), cam, robot_radius=app.model.robot_radius)
+    clip = surface.get_clip()
+    surface.set_clip(pygame.Rect(cam.viewport))
+    try:
+        draw_grid(surface, cam, app.model.tile)
+        if drive is not None:
+            draw_drive(surface, cam, app)
+        else:
+            draw_editing(surface, cam, app, arena)
+    finally:
+        surface.set_clip(clip)
+
+
+def _drawable(arena: Arena) -> Arena:
+    """The viewer draws doors relative to the walls' bounds: no walls, no doors."""
+    if not arena.walls:
+        from dataclasses import replace
+
+        return replace(arena, doors=())
+    return arena
+
+
+def draw_grid(surface: pygame.Surface, cam: Camera, tile: float) -> None:
+    """Ceiling-tile grid (every tile, or every 2, 5, 10 ... when zoomed out), axes bluish."""
+    left, top, width, height = cam.viewport
+    k = next(m for m in (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000) if tile * m * cam.zoom >= 9)
+    step = tile * k
+    (x0, y1), (x1, y0) = cam.to_world((left, top)), cam.to_world((left + width, top + height))
+    overlay = pygame.Surface((width, height), pygame.SRCALPHA)
+    for i in range(math.floor(x0 / step), math.ceil(x1 / step) + 1):
+        sx = cam.to_screen((i * step, 0))[0] - left
+        colour = GRID_AXIS if i == 0 else GRID_MAJOR if (i * k) % 5 == 0 else GRID_MINOR
+        pygame.draw.line(overlay, colour, (sx, 0), (sx, height))
+    for j in range(math.floor(y0 / step), math.ceil(y1 / step) + 1):
+        sy = cam.to_screen((0, j * step))[1] - top
+        colour = GRID_AXIS if j == 0 else GRID_MAJOR if (j * k) % 5 == 0 else GRID_MINOR
+        pygame.draw.line(overlay, colour, (0, sy), (width, sy))
+    surface.blit(overlay, (left, top))
+
+
+# =========================================================================================
+# Editing overlay
+# =========================================================================================
+def draw_editing(surface: pygame.Surface, cam: Camera, app: EditorApp, arena: Arena) -> None:
+    if app.show_lengths:
+        draw_lengths(surface, cam, arena, app.model.tile)
+    draw_start(surface, cam, arena, app.model.robot_radius)
+    draw_goal_labels(surface, cam, arena)
+    draw_handles(surface, cam, arena)
+    draw_rubber_band(surface, cam, app, arena)
+    if app.hover_edge is not None:
+        poly, i, _ = app.hover_edge
+        _draw_edge(surface, cam, arena, poly, i, HOVER, 4)
+    if app.hover is not None and app.hover != app.selection:
+        _draw_item(surface, cam, arena, app.hover, HOVER, 2)
+    if app.selection is not None:
+        _draw_item(surface, cam, arena, app.selection, SELECT, 3)
+    problem = app.model.problem()
+    if problem is not None:
+        for poly, i in problem.edges:
+            _draw_edge(surface, cam, arena, poly, i, ERROR, 4)
+        for path in problem.paths:
+            _draw_item(surface, cam, arena, path, ERROR, 3, big=True)
+
+
+def draw_lengths(surface: pygame.Surface, cam: Camera, arena: Arena, tile: float) -> None:
+    """Each wall and obstacle edge's length at its middle, when the edge is long enough."""
+    for poly_path in items.polygon_paths(arena)[: 1 + len(arena.obstacles)]:
+        poly = items.get_polygon(arena, poly_path)
+        n = len(poly)
+        for i in range(n if n >= 3 else n - 1):
+            a, b = poly[i], poly[(i + 1) % n]
+            sa, sb = cam.to_screen(a), cam.to_screen(b)
+            if math.hypot(sb[0] - sa[0], sb[1] - sa[1]) < 80:
+                continue
+            length = math.hypot(b[0] - a[0], b[1] - a[1])
+            label = f"{length:.4g} in"
+            tiles = length / tile
+            if abs(tiles - round(tiles)) < 1e-9:
+                label += f" ({round(tiles)} t)"
+            img = draw.font(SMALL).render(label, True, LENGTH_TEXT)
+            box = img.get_rect(center=((sa[0] + sb[0]) // 2, (sa[1] + sb[1]) // 2)).inflate(4, 0)
+            pygame.draw.rect(surface, LENGTH_BG, box)
+            surface.blit(img, img.get_rect(center=box.center))
+
+
+def draw_start(surface: pygame.Surface, cam: Camera, arena: Arena, radius: float) -> None:
+    """The robot's footprint at the start, and its heading (or ``?`` when random)."""
+    c = cam.to_screen(arena.start.at)
+    r = cam.scale(radius)
+    pygame.draw.circle(surface, draw.START, c, r, width=2)
+    heading = arena.start.heading_deg
+    if heading is None:
+        img = draw.font(SMALL).render("?", True, draw.START)
+        surface.blit(img, img.get_rect(center=(c[0] + r + 6, c[1] - r - 2)))
+        return
+    h = math.radians(heading)
+    x, y = arena.start.at
+    tip = cam.to_screen((x + 1.6 * radius * math.cos(h), y + 1.6 * radius * math.sin(h)))
+    pygame.draw.line(surface, draw.START, c, tip, width=2)
+
+
+def draw_goal_labels(surface: pygame.Surface, cam: Camera, arena: Arena) -> None:
+    """Names of the goals that have no door of their own (doors are labelled by the viewer)."""
+    doors = {d.name for d in arena.doors}
+    for g in arena.goals:
+        if g.name in doors:
+            continue
+        s = cam.to_screen(g.at)
+        colour = draw.GOAL if g.name == arena.active_goal else (80, 120, 90)
+        img = draw.font(FONT).render(g.name, True, colour)
+        surface.blit(img, (s[0] + 7, s[1] - img.get_height() - 2))
+
+
+def draw_handles(surface: pygame.Surface, cam: Camera, arena: Arena) -> None:
+    """Small squares on every polygon vertex (walls dark, obstacles grey, zones purple)."""
+    for poly_path in items.polygon_paths(arena):
+        colour = {"walls": HANDLE_WALL, "obstacles": HANDLE_OBSTACLE}.get(poly_path[0], HANDLE_ZONE)
+        for p in items.get_polygon(arena, poly_path):
+            s = cam.to_screen(p)
+            rect = pygame.Rect(s[0] - 3, s[1] - 3, 7, 7)
+            pygame.draw.rect(surface, (255, 255, 255), rect)
+            pygame.draw.rect(surface, colour, rect, width=2)
+
+
+def draw_rubber_band(surface: pygame.Surface, cam: Camera, app: EditorApp, arena: Arena) -> None:
+    """While adding vertices: the would-be edges from the last vertex to the cursor."""
+    poly = app.building if app.building is not None else ("walls",) if app.tool == "wall" else None
+    if poly is None or app.cursor is None:
+        return
+    try:
+        pts = items.get_polygon(arena, poly)
+    except items.EditError:
+        return
+    if not pts:
+        return
+    cursor = cam.to_screen(app.cursor)
+    pygame.draw.line(surface, RUBBER, cam.to_screen(pts[-1]), cursor, width=2)
+    if len(pts) >= 2:
+        pygame.draw.line(surface, (150, 200, 220), cursor, cam.to_screen(pts[0]), width=1)
+
+
+def _draw_edge(
+    surface: pygame.Surface, cam: Camera, arena: Arena, poly: Path, i: int, colour, width: int
+) -> None:
+    try:
+        pts = items.get_polygon(arena, poly)
+    except items.EditError:
+        return
+    if len(pts) >= 2 and 0 <= i < len(pts):
+        a, b = pts[i], pts[(i + 1) % len(pts)]
+        pygame.draw.line(surface, colour, cam.to_screen(a), cam.to_screen(b), width=width)
+
+
+def _draw_item(
+    surface: pygame.Surface,
+    cam: Camera,
+    arena: Arena,
+    path: Path,
+    colour,
+    width: int,
+    big: bool = False,
+) -> None:
+    """Outline a polygon or ring a point (``big``: a larger ring, for problems)."""
+    try:
+        if items.is_polygon_path(path):
+            pts = [cam.to_screen(p) for p in items.get_polygon(arena, path)]
+            if len(pts) >= 2:
+                pygame.draw.lines(surface, colour, len(pts) >= 3, pts, width=width)
+            for s in pts:
+                pygame.draw.circle(surface, colour, s, 5, width=2)
+            return
+        s = cam.to_screen(items.get_point(arena, path))
+    except items.EditError:
+        return
+    pygame.draw.circle(surface, colour, s, 14 if big else 9, width=width)
+
+
+# =========================================================================================
+# Test drive
+# =========================================================================================
+def draw_drive(surface: pygame.Surface, cam: Camera, app: EditorApp) -> None:
+    """Show Sensors: the viewer's sensor lines and the robot in the paper's colours."""
+    drive = app.drive
+    pose = drive.pose
+    draw.draw_sensors(surface, cam, pose, drive.env.sensors, drive.readings)
+    colour = draw.ROBOT_STATES[drive.robot_state()]
+    draw.draw_robot(surface, cam, pose, drive.env.world.radius, colour)
+
+
+# =========================================================================================
+# Side panel and status bar
+# =========================================================================================
+TOOLS_HELP = (
+    ("select", "V"),
+    ("wall", "W"),
+    ("insert", "I"),
+    ("obstacle", "O"),
+    ("goal", "G"),
+    ("marker", "E"),
+    ("zone", "Z"),
+    ("start", "S"),
+)
+EDIT_KEYS = (
+    "Del delete   R rename goal   A active goal",
+    "Tab next active   P type x y   N arena name",
+    "H heading fixed/random   [ ] turn 15 deg",
+    "D default zone   X snap   L lengths   F fit",
+    "Ctrl+Z undo   Ctrl+Y redo",
+    "Ctrl+S save   Ctrl+Shift+S save as",
+    "Ctrl+O open   Ctrl+N new   Ctrl+D door table",
+    "F5 test drive   F12 screenshot   Ctrl+Q quit",
+    "wheel/+ - zoom   right-drag/arrows pan",
+)
+DRIVE_KEYS = (
+    "Up forward    Down reverse",
+    "Left rotate left   Right rotate right",
+    "Space stop   Enter back to start",
+    "Esc or F5: back to editing",
+)
+
+
+class _Writer:
+    """Writes lines down the panel."""
+
+    def __init__(self, surface: pygame.Surface, x: int, y: int) -> None:
+        self.surface, self.x, self.y = surface, x, y
+
+    def line(self, s: str, colour=PANEL_TEXT, size: int = FONT, indent: int = 0) -> pygame.Rect:
+        w = text(self.surface, s, (self.x + indent, self.y), colour, size)
+        rect = pygame.Rect(self.x + indent, self.y, w, LINE)
+        self.y += LINE if size >= FONT else LINE - 3
+        return rect
+
+    def gap(self, n: int = 6) -> None:
+        self.y += n
+
+
+def draw_panel(app: EditorApp) -> None:
+    surface = app.screen
+    rect = pygame.Rect(app.panel_rect)
+    surface.fill(PANEL_BG, rect)
+    w = _Writer(surface, rect.x + 12, rect.y + 10)
+    m, arena = app.model, app.model.arena
+    w.line("Koolio arena editor", PANEL_HOT, 22)
+    w.line(f"file: {m.path or '(not saved yet)'}{'  *modified*' if m.dirty else ''}", PANEL_DIM)
+    size = ""
+    if arena.walls:
+        xmin, ymin, xmax, ymax = arena.bounds()
+        size = f"   {xmax - xmin:g} x {ymax - ymin:g} in"
+    w.line(f"arena: {arena.name}{size}", PANEL_TEXT)
+    if arena.rotate_deg:
+        w.line(f"rotate_deg {arena.rotate_deg:g} (drawn unrotated)", PANEL_DIM)
+    w.gap()
+    if app.drive is not None:
+        _panel_drive(w, app)
+    else:
+        _panel_tools(w, app)
+        _panel_selection(w, app)
+        app.goal_rows = _panel_goals(w, app)
+        w.gap()
+        for s in EDIT_KEYS:
+            w.line(s, PANEL_DIM, SMALL)
+
+
+def _panel_tools(w: _Writer, app: EditorApp) -> None:
+    w.line("Tools (click on the canvas):", PANEL_DIM)
+    x0, y0 = w.x, w.y
+    for k, (name, key) in enumerate(TOOLS_HELP):
+        colour = PANEL_HOT if name == app.tool else PANEL_TEXT
+        label = f"[{key}] {name}"
+        if name == app.tool:
+            label += " <"
+        text(w.surface, label, (x0 + (k % 2) * 140, y0 + (k // 2) * LINE), colour)
+    w.y = y0 + 4 * LINE + 4
+    snap = f"{m:g} in" if (m := app.model.snap_step) else "off (0.01 in)"
+    w.line(f"snap {snap}   grid {app.model.tile:g} in (1 tile)", PANEL_TEXT)
+    w.gap()
+
+
+def _panel_selection(w: _Writer, app: EditorApp) -> None:
+    sel = app.selection
+    if sel is None:
+        w.line("nothing selected", PANEL_DIM)
+        return
+    arena, tile = app.model.arena, app.model.tile
+    try:
+        if items.is_polygon_path(sel):
+            pts = items.get_polygon(arena, sel)
+            w.line(f"selected {items.path_str(sel)}: {len(pts)} points", SELECT)
+        else:
+            p = items.get_point(arena, sel)
+            w.line(f"selected {items.path_str(sel)} ({p[0]:g}, {p[1]:g})", SELECT)
+    except items.EditError:
+        w.line("nothing selected", PANEL_DIM)
+        return
+    if items.is_vertex_path(sel):
+        for a, b, name in app.adjacent_edges(sel):
+            short = name.replace(items.path_str(sel[:-1]), "")
+            w.line(f"{short}: {fmt_len(math.dist(a, b), tile)}", PANEL_TEXT, SMALL, 10)
+    elif sel[0] == "goals":
+        w.line("A: make active   R: rename", PANEL_DIM, SMALL, 10)
+    elif sel == ("start",):
+        h = arena.start.heading_deg
+        w.line(f"heading {'random' if h is None else f'{h:g} deg'}", PANEL_TEXT, SMALL, 10)
+
+
+def _panel_goals(w: _Writer, app: EditorApp) -> list[tuple[pygame.Rect, str]]:
+    arena = app.model.arena
+    w.gap()
+    w.line(f"Goals ({len(arena.goals)}; click one to make it active):", PANEL_DIM)
+    rows = []
+    x0, y0 = w.x, w.y
+    n = len(arena.goals)
+    cols = 1 if n <= 6 else 2 if n <= 20 else 3
+    per_col = max(1, math.ceil(n / cols))
+    for k, g in enumerate(arena.goals):
+        col, row = divmod(k, per_col)
+        active = g.name == arena.active_goal
+        label = f"{'>' if active else ' '} {g.name}"
+        pos = (x0 + col * (300 // cols), y0 + row * LINE)
+        width = text(
+            w.surface, _fit(label, 300 // cols - 8), pos, PANEL_HOT if active else PANEL_TEXT
+        )
+        rows.append((pygame.Rect(pos[0], pos[1], max(width, 60), LINE), g.name))
+    w.y = y0 + (per_col if n else 0) * LINE
+    n = len(arena.end_of_world)
+    h = arena.start.heading_deg
+    w.line(f"end-of-world markers: {n}   obstacles: {len(arena.obstacles)}", PANEL_TEXT)
+    sx, sy = arena.start.at
+    w.line(f"start ({sx:g}, {sy:g}) heading {'random' if h is None else f'{h:g}'}", PANEL_TEXT)
+    return rows
+
+
+def _panel_drive(w: _Writer, app: EditorApp) -> None:
+    w.line("TEST DRIVE (Show Sensors)", PANEL_HOT, 22)
+    for s in app.drive.hud_lines():
+        w.line(s, PANEL_TEXT, SMALL)
+    w.gap()
+    state = app.drive.robot_state()
+    w.line(f"robot: {state.replace('_', ' ')}", PANEL_HOT)
+    w.gap()
+    for s in DRIVE_KEYS:
+        w.line(s, PANEL_DIM)
+    w.gap()
+    w.line("black: sonar rays   blue: camera sees goal", PANEL_DIM, SMALL)
+    w.line("yellow: camera sees end of world", PANEL_DIM, SMALL)
+    w.line("robot red / pink bump / purple off the", PANEL_DIM, SMALL)
+    w.line("end of the world / black at the goal", PANEL_DIM, SMALL)
+
+
+def draw_status(app: EditorApp) -> None:
+    surface = app.screen
+    rect = pygame.Rect(app.status_rect)
+    surface.fill(STATUS_BG, rect)
+    pygame.draw.line(surface, (180, 180, 180), rect.topleft, rect.topright)
+    x, y = rect.x + 10, rect.y + 5
+    text(surface, app.ruler_text(), (x, y), STATUS_TEXT)
+    problem = app.model.problem()
+    if problem is None:
+        text(surface, f"valid arena ({app.model.source})", (x, y + LINE), OK)
+    else:
+        for k, part in enumerate(_wrap(problem.message, rect.width - 20)[:2]):
+            text(surface, part, (x, y + LINE * (1 + k)), ERROR)
+    y3 = y + 3 * LINE
+    if app.prompt is not None:
+        label = app.prompt.label + (f" {app.prompt.text}_" if app.prompt.kind == "text" else "")
+        pygame.draw.rect(
+            surface, (255, 240, 170), pygame.Rect(rect.x, y3 - 3, rect.width, LINE + 4)
+        )
+        text(surface, _fit(label, rect.width - 20), (x, y3), STATUS_TEXT)
+    elif app.message:
+        colour = ERROR if app.message_is_error else STATUS_TEXT
+        text(surface, _fit(app.message, rect.width - 20), (x, y3), colour)
+
+
+def _wrap(s: str, width: int, size: int = FONT) -> list[str]:
+    """``s`` broken into lines of at most ``width`` pixels (at spaces)."""
+    f = draw.font(size)
+    lines, cur = [], ""
+    for word in s.split(" "):
+        trial = f"{cur} {word}" if cur else word
+        if cur and f.size(trial)[0] > width:
+            lines.append(cur)
+            cur = word
+        else:
+            cur = trial
+    return [*lines, cur]
+
+
+def _fit(s: str, width: int, size: int = FONT) -> str:
+    """``s`` shortened with ``...`` to fit ``width`` pixels."""
+    f = draw.font(size)
+    if f.size(s)[0] <= width:
+        return s
+    while s and f.size(s + "...")[0] > width:
+        s = s[:-1]
+    return s + "..."
+
+
+def world_label(p: Point, tile: float) -> str:
+    """``(120, 88) in = (5, 3.67) tiles``."""
+    return f"({p[0]:.4g}, {p[1]:.4g}) in = ({_num(p[0] / tile)}, {_num(p[1] / tile)}) tiles"
