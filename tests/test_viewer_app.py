@@ -327,11 +327,11 @@ def test_view_learns_exactly_like_train_and_writes_a_screenshot(tmp_path, config
     shot = b / "shot.png"
     argv = ["view", "--arena", "room", "--config", str(config), "--seed", "5"]
     argv += ["--episodes", "3", "--qtable", str(b / "q.qtable"), "--log", str(b / "log.csv")]
-    assert main([*argv, "--clockless", "--screenshot", str(shot), "--size", "1024x700"]) == 0
+    assert main([*argv, "--clockless", "--screenshot", str(shot), "--size", "1100x720"]) == 0
     assert (b / "q.qtable").read_bytes() == (a / "q.qtable").read_bytes()
     assert (b / "log.csv").read_text() == (a / "log.csv").read_text()
     img = pygame.image.load(str(shot))
-    assert img.get_size() == (1024, 700)
+    assert img.get_size() == (1100, 720)
     assert "3 episodes finished" in capsys.readouterr().out
 
 
@@ -397,3 +397,21 @@ def test_bad_flags_one_line_error_exit_2(tmp_path, capsys, extra) -> None:
     assert exc.value.code == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "error" in err
+
+
+def test_greedy_session_watches_the_episodes_of_eval(tmp_path, config) -> None:
+    """``view --greedy`` shows the very episodes ``koolio-pm eval`` scores (same seed)."""
+    from koolio_pymunk.training import evaluate
+
+    q = tmp_path / "q.qtable"
+    env = KoolioEnv("room", config=config)
+    train(env, QTableStore(q), 3, seed=0, log_path=None, report=None)
+    table = load_qtable(q)
+    ev = evaluate(KoolioEnv("room", config=config), table, 3, seed=4)
+    session = Session(KoolioEnv("room", config=config), q, seed=4, episodes=3, greedy=True)
+    session.run(10 * CAP)
+    assert session.done and session.stats.episodes == 3
+    steps = [r.steps for r in session.results]
+    assert sum(steps) / 3 == pytest.approx(ev.mean_steps)
+    assert session.stats.reward_sum / 3 == pytest.approx(ev.mean_reward)
+    assert session.stats.goals / 3 == pytest.approx(ev.goal_rate)

@@ -38,7 +38,7 @@ IDLE_FPS = 60
 #: Clock speed slider: steps per second from SPEED_MIN to SPEED_MAX (logarithmic).
 SPEED_MIN, SPEED_MAX = 1.0, 1000.0
 DEFAULT_SIZE = (1280, 800)
-MIN_SIZE = (960, 600)
+MIN_SIZE = (1080, 700)
 PANEL_W = 230
 CURVE_WINDOW = 25
 
@@ -59,6 +59,7 @@ HELP_LINES: list[tuple[str, str]] = [
     ("wheel, drag", "zoom, scroll"),
     ("Q", "Exit (fold + save)"),
     ("Shift+Q", "Exit Without Save"),
+    ("click overview", "look there"),
     ("F1 / ?", "this help"),
     ("Esc", "close the help"),
 ]
@@ -252,11 +253,11 @@ class Layout:
             oh = min(max(70, round(left * aspect * 1.06) + 8), round(h * 0.22))
             overview = (0, 0, left, oh)
             top = oh
-        bottom_h = min(330, max(260, round(h * 0.38)))
+        bottom_h = min(330, max(290, round(h * 0.38)))
         main = (0, top, left, h - top - bottom_h)
         y = h - bottom_h
-        hud_w = max(340, round(left * 0.36))
-        stats_w = max(280, round(left * 0.28))
+        hud_w = max(320, round(left * 0.36))
+        stats_w = max(265, round(left * 0.28))
         hud = (0, y, hud_w, bottom_h)
         stats = (hud_w, y, stats_w, bottom_h)
         curve = (hud_w + stats_w, y, left - hud_w - stats_w, bottom_h)
@@ -527,11 +528,15 @@ class ViewerApp:
             self.set_flag("follow", False)
 
     def _follow_robot(self) -> None:
+        """Centre on the robot along each axis the arena does not fit in; else centre the
+        arena along that axis (a compact arena stays put, a long one scrolls)."""
         x, y, _ = self.env.world.pose(0)
-        _, ymin, _, ymax = self.bounds
-        view_h = self.camera.viewport[3] / self.camera.zoom
-        cy = (ymin + ymax) / 2.0 if view_h >= (ymax - ymin) * 1.02 else y
-        self.camera.follow((x, cy))
+        xmin, ymin, xmax, ymax = self.bounds
+        _, _, vw, vh = self.camera.viewport
+        zoom = self.camera.zoom
+        cx = (xmin + xmax) / 2.0 if vw / zoom >= (xmax - xmin) * 1.02 else x
+        cy = (ymin + ymax) / 2.0 if vh / zoom >= (ymax - ymin) * 1.02 else y
+        self.camera.follow((cx, cy))
 
     # -- events ----------------------------------------------------------------------------
     def handle_events(self) -> None:

@@ -209,12 +209,13 @@ def draw_curve(
     clip = surface.get_clip()
     surface.set_clip(rect)
     inner = panel(surface, rect, "Learning curve")
-    plot = pygame.Rect(inner.x + 44, inner.y + 4, inner.w - 50, inner.h - 40)
+    narrow = inner.w < 360  # the legend takes two lines
+    plot = pygame.Rect(inner.x + 44, inner.y + 4, inner.w - 50, inner.h - (54 if narrow else 40))
     pygame.draw.rect(surface, (255, 255, 255), plot)
     pygame.draw.rect(surface, CURVE_AXES, plot, width=1)
     n = len(returns)
     if n == 0:
-        msg = text("no finished episode yet", ROW_SIZE, DIM)
+        msg = text("no finished episode yet", 15, DIM)
         surface.blit(msg, msg.get_rect(center=plot.center))
         lo, hi = -1.0, 1.0
     else:
@@ -234,7 +235,7 @@ def draw_curve(
     ly = plot.bottom + 19
     pygame.draw.line(surface, CURVE_RETURN, (plot.x, ly + 6), (plot.x + 18, ly + 6), 2)
     surface.blit(text("return per episode", 15, INK), (plot.x + 22, ly))
-    lx = plot.x + 150
+    lx, ly = (plot.x, ly + 14) if narrow else (plot.x + 150, ly)
     pygame.draw.line(surface, CURVE_AVERAGE, (lx, ly + 6), (lx + 18, ly + 6), 3)
     surface.blit(text(f"moving average ({window})", 15, INK), (lx + 22, ly))
     surface.set_clip(clip)
@@ -288,7 +289,7 @@ def draw_help(
 ) -> dict[str, pygame.Rect]:
     """The help overlay: ``(key, what it does)`` lines on a translucent sheet."""
     sheet = pygame.Surface(rect.size, pygame.SRCALPHA)
-    sheet.fill((20, 24, 34, 225))
+    sheet.fill((20, 24, 34, 242))
     surface.blit(sheet, rect.topleft)
     y = rect.y + 12
     surface.blit(text("Keyboard and mouse", 24, (255, 255, 255)), (rect.x + 16, y))
