@@ -125,8 +125,10 @@ class SensorConfig:
     noise: NoiseConfig = field(default_factory=NoiseConfig)
     really_long_distance: float = 10_000.0
     """``ReallyLongDistance``: the reading of a sensor that sees nothing, inches."""
-    backend: str = "pymunk"
-    """Ray engine: ``pymunk`` (segment queries, the reference)."""
+    backend: str = "fast"
+    """Ray engine: ``fast`` (a compiled kernel; the same readings, bit for bit on the
+    shipped arenas) or ``pymunk`` (pymunk segment queries, the reference). See
+    ``docs/speed.md``."""
 
 
 @dataclass
@@ -340,10 +342,10 @@ def _validate(cfg: Config, src: str) -> None:
     )
     _check(s.noise.scale >= 0, src, "sensors.noise.scale", "must be >= 0")
     _check(
-        s.backend in ("pymunk",),
+        s.backend in ("pymunk", "fast"),
         src,
         "sensors.backend",
-        f"unknown backend {s.backend!r} (valid: pymunk)",
+        f"unknown backend {s.backend!r} (valid: pymunk, fast)",
     )
     so = s.sonar
     _check(len(so.sonar_sensors_deg) >= 1, src, "sensors.sonar.sonar_sensors_deg", "empty")

@@ -13,7 +13,7 @@ from gymnasium import spaces
 from .arena import Arena, Point, load_arena
 from .config import Config, load_config
 from .errors import ConfigError
-from .geometry import point_in_polygon
+from .geometry import EPS, point_in_polygon
 from .qtable import KeywordLayout
 from .rescue import rescue_robot, wants_rescue
 from .rules import TERMS, Judgement, judge
@@ -28,12 +28,28 @@ class EndZones:
         self.polygons = [m.zone for m in arena.end_of_world if m.zone is not None]
         self.discs = [m.at for m in arena.end_of_world if m.zone is None]
         self.disc_radius = 2.0 * radius
+        # Bounding boxes grown by the boundary tolerance: a point outside one is outside
+        # its polygon (no edge within EPS, and an even number of crossings), so the exact
+        # test runs only near a zone.
+        self._boxes = [
+            (
+                min(p[0] for p in poly) - EPS,
+                min(p[1] for p in poly) - EPS,
+                max(p[0] for p in poly) + EPS,
+                max(p[1] for p in poly) + EPS,
+                poly,
+            )
+            for poly in self.polygons
+        ]
 
     def contains(self, x: float, y: float) -> bool:
         for cx, cy in self.discs:
             if math.hypot(x - cx, y - cy) <= self.disc_radius:
                 return True
-        return any(point_in_polygon((x, y), poly) for poly in self.polygons)
+        for x0, y0, x1, y1, poly in self._boxes:
+            if x0 <= x <= x1 and y0 <= y <= y1 and point_in_polygon((x, y), poly):
+                return True
+        return False
 
 
 class KoolioEnv(gym.Env):
@@ -177,12 +193,9 @@ class KoolioEnv(gym.Env):
         """
         prev_key = self.state_key
         self.world.act((action,), self._distance, self._arc)
-        r = self._sense()
+        bump, goal_close = self._sense()
         x, y, _ = self.world.pose(0)
-        bump = self.sensors.bump(r)
-        j = judge(
-            action, self.sensors.goal_close(r), self.zones.contains(x, y), bump, self.config.rewards
-        )
+        j = judge(action, goal_close, self.zones.contains(x, y), bump, self.config.rewards)
         self.steps += 1
         self.bumps += int(bump)
         self.episode_reward += j.reward
@@ -224,11 +237,20 @@ class KoolioEnv(gym.Env):
         self.last_action: int | None = None
         self.keyword: int | None = None
 
-    def _sense(self) -> Readings:
-        self.readings = self.sensors.read(self.world.pose(0), self.np_random)
-        self.codes = self.sensors.encode(self.readings)
-        self.state_key = self.layout.state_key(self.codes)
-        return self.readings
+    def _sense(self) -> tuple[bool, bool]:
+        """Read the sensors; sets ``state_key`` and returns ``(bump, goal_close)``."""
+        self.state_key, bump, goal_close = self.sensors.sense(self.world.pose(0), self.np_random)
+        return bump, goal_close
+
+    @property
+    def readings(self) -> Readings:
+        """The last reading of every sensor (noised distances, rays, markers seen)."""
+        return self.sensors.last()[0]
+
+    @property
+    def codes(self) -> tuple[int, ...]:
+        """The encoded last reading, in keyword order (the observation)."""
+        return self.sensors.last()[1]
 
     def _obs(self) -> np.ndarray:
         return np.array(self.codes, dtype=np.int64)

@@ -46,11 +46,12 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import pymunk
 
 from .arena import Point
 from .config import SensorConfig
-from .world import WALL_ONLY, World
+from .raycast import make_engine, sense_one
+from .readout import readout
+from .world import World
 
 #: Codes of the sonar intervals (Table 6) and camera intervals (Table 7).
 SONAR_LEVELS = ("Bump", "Close", "Medium", "Far")
@@ -84,7 +85,15 @@ class Readings:
 
 
 class SensorSuite:
-    """Reads and encodes the sensors of robot ``robot`` of ``world``."""
+    """Reads and encodes the sensors of robot ``robot`` of ``world``.
+
+    The geometry comes from a ray engine (:mod:`koolio_pymunk.raycast`) chosen by
+    ``cfg.backend``: ``pymunk`` (segment queries, the reference) or ``fast`` (compiled
+    kernel, same numbers). :meth:`read` and :meth:`encode` are the reference read-out;
+    :meth:`sense` is the learner's hot path (one state key, Bump and goal-close per step)
+    and, with the fast backend, runs the whole reading in two compiled calls with the
+    same noise draws (:mod:`koolio_pymunk.readout`).
+    """
 
     def __init__(
         self,
@@ -93,6 +102,7 @@ class SensorSuite:
         goal: Point,
         markers: Sequence[Point],
         robot: int = 0,
+        backend: str | None = None,
     ) -> None:
         self.cfg = cfg
         self.world = world
@@ -120,6 +130,10 @@ class SensorSuite:
                 [cfg.compass.noise * scale],
             ]
         )
+        self.backend = backend or cfg.backend
+        self.engine = make_engine(self.backend, world)
+        self._kernel = KernelInputs(self)
+        self._last: tuple[Readings, tuple[int, ...]] | None = None
 
     # -- public API -----------------------------------------------------------------
     @property
@@ -130,6 +144,36 @@ class SensorSuite:
     def read(self, pose: tuple[float, float, float], rng: np.random.Generator) -> Readings:
         """Read every sensor at ``pose``; all noise is drawn from ``rng``."""
         x, y, h = pose
+        return self.finish(*self.raw(x, y, h), rng)
+
+    def finish(
+        self, raw: np.ndarray, rays: np.ndarray, targets: list[int], rng: np.random.Generator
+    ) -> Readings:
+        """Noise (drawn from ``rng``) and camera limit applied to a :meth:`raw` reading."""
+        noised = self.apply_noise(raw, rng)
+        n, m = self.n_sonar, self.n_camera
+        goal_n = self._camera_limit(noised[n : n + m], raw[n : n + m])
+        eow_n = self._camera_limit(noised[n + m : n + 2 * m], raw[n + m : n + 2 * m])
+        eow_targets = [k if eow_n[c] < self.far else -1 for c, k in enumerate(targets)]
+        return Readings(
+            sonar=noised[:n],
+            goal=goal_n,
+            eow=eow_n,
+            compass=float(noised[-1] % 256.0),
+            rays=rays,
+            eow_target=eow_targets,
+        )
+
+    def raw(self, x: float, y: float, h: float) -> tuple[np.ndarray, np.ndarray, list[int]]:
+        """Noise-free readings ``[sonar..., goal cam..., end-of-world cam..., compass]``,
+        every sub-arc ray's centre distance, and the marker each camera sees (-1: none)."""
+        if self.backend == "fast":
+            k = self._kernel
+            raw = np.empty(k.n_raw)
+            rays = np.empty(self.ray_offsets.shape)
+            eow_k = np.empty(self.n_camera, np.int64)
+            k.sense(x, y, h, raw, rays, eow_k)
+            return raw, rays, eow_k.tolist()
         rays = self.cast_sonar(x, y, h)
         sonar = rays.min(axis=1) - self.radius
         sonar = np.where(rays.min(axis=1) > self.ray_length - 1e-9, self.far, sonar)
@@ -142,20 +186,28 @@ class SensorSuite:
             eow[c] = d
             targets.append(k)
         compass = (h / (2.0 * math.pi)) * 256.0
-        raw = np.concatenate([sonar, goal, eow, [compass]])
-        noised = self.apply_noise(raw, rng)
-        n, m = self.n_sonar, self.n_camera
-        goal_n = self._camera_limit(noised[n : n + m], goal)
-        eow_n = self._camera_limit(noised[n + m : n + 2 * m], eow)
-        eow_targets = [k if eow_n[c] < self.far else -1 for c, k in enumerate(targets)]
-        return Readings(
-            sonar=noised[:n],
-            goal=goal_n,
-            eow=eow_n,
-            compass=float(noised[-1] % 256.0),
-            rays=rays,
-            eow_target=eow_targets,
-        )
+        return np.concatenate([sonar, goal, eow, [compass]]), rays, targets
+
+    def sense(
+        self, pose: tuple[float, float, float], rng: np.random.Generator
+    ) -> tuple[int, bool, bool]:
+        """One step's reading: ``(state_key, bump, goal_close)``; same draws as :meth:`read`.
+
+        :meth:`last` gives the :class:`Readings` and codes of this reading (built on demand).
+        """
+        if self.backend != "fast":
+            r = self.read(pose, rng)
+            codes = self.encode(r)
+            self._last = (r, codes)
+            return self._kernel.key(codes), self.bump(r), self.goal_close(r)
+        self._last = None
+        return self._kernel.sense_readout(pose, rng)
+
+    def last(self) -> tuple[Readings, tuple[int, ...]]:
+        """The :class:`Readings` and state codes of the last :meth:`sense`."""
+        if self._last is None:
+            self._last = self._kernel.last_readings()
+        return self._last
 
     def encode(self, r: Readings) -> tuple[int, ...]:
         """The state: codes in keyword order (Tables 6, 7 and 12)."""
@@ -178,32 +230,16 @@ class SensorSuite:
 
     def set_goal(self, goal: Point) -> None:
         self.goal = (float(goal[0]), float(goal[1]))
+        self._kernel.goal[:] = self.goal
 
     # -- geometry -------------------------------------------------------------------
     def cast_sonar(self, x: float, y: float, h: float) -> np.ndarray:
         """Centre distance of the first wall along every sub-arc ray (ray length if none)."""
-        angles = h + self.ray_offsets
-        ends_x = x + self.ray_length * np.cos(angles)
-        ends_y = y + self.ray_length * np.sin(angles)
-        query = self.world.space.segment_query_first
-        out = np.full(angles.shape, self.ray_length)
-        start = (x, y)
-        length = self.ray_length
-        for idx in np.ndindex(angles.shape):
-            hit = query(start, (float(ends_x[idx]), float(ends_y[idx])), 0.0, WALL_ONLY)
-            if hit is not None:
-                out[idx] = hit.alpha * length
-        return out
+        return self.engine.cast(x, y, h + self.ray_offsets, self.ray_length)
 
     def line_of_sight(self, x: float, y: float, target: Point) -> bool:
         """No wall segment between the centre ``(x, y)`` and ``target``."""
-        dist = math.hypot(target[0] - x, target[1] - y)
-        if dist < 1e-9:
-            return True
-        hit: pymunk.SegmentQueryInfo | None = self.world.space.segment_query_first(
-            (x, y), target, 0.0, WALL_ONLY
-        )
-        return hit is None or hit.alpha * dist >= dist - 1e-7
+        return self.engine.line_of_sight(x, y, target[0], target[1])
 
     def _camera_distance(
         self, x: float, y: float, direction: float, targets: Sequence[Point]
@@ -225,6 +261,12 @@ class SensorSuite:
         unseen = (clean >= self.far) | (noised > self.cfg.camera.max_camera_view)
         return np.where(unseen, self.far, noised)
 
+    def draw_noise(self, rng: np.random.Generator, n: int) -> np.ndarray:
+        """The ``n`` raw noise draws of one reading (uniform (-1, 1) or standard normal)."""
+        if self.cfg.noise.model == "gaussian":
+            return rng.standard_normal(n)
+        return rng.uniform(-1.0, 1.0, n)
+
     def apply_noise(self, raw: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """``raw * (1 + e)`` per the noise model; one draw per reading, always drawn."""
         model = self.cfg.noise.model
@@ -234,6 +276,102 @@ class SensorSuite:
             e = rng.uniform(-1.0, 1.0, raw.shape) * self.noise_fracs
         out = raw * (1.0 + e)
         return np.where(raw >= self.far, raw, out)
+
+
+class KernelInputs:
+    """Arrays and buffers of one :class:`SensorSuite` for the compiled kernels.
+
+    ``sense(x, y, h, raw, rays, eow_k)`` is :func:`raycast.sense_one`;
+    ``sense_readout(pose, rng)`` adds the noise draws and :func:`readout.readout`.
+    """
+
+    def __init__(self, s: SensorSuite) -> None:
+        self.suite = s
+        self.n_raw = s.n_sonar + 2 * s.n_camera + 1
+        self.ray_offsets = np.ascontiguousarray(s.ray_offsets, dtype=np.float64)
+        self.params = np.array([s.ray_length, s.radius, s.far, s.camera_half_arc])
+        self.camera_dirs = np.ascontiguousarray(s.camera_dirs, dtype=np.float64)
+        self.goal = np.array(s.goal, dtype=np.float64)
+        self.markers = np.array(s.markers, dtype=np.float64).reshape(-1, 2)
+        self.walls = getattr(s.engine, "walls", None)
+        gaussian = s.cfg.noise.model == "gaussian"
+        self.fracs = s.noise_fracs / 2.0 if gaussian else s.noise_fracs.copy()
+        self.limits = np.array([s.far, s.cfg.camera.max_camera_view])
+        self.group_members = np.array([i for g in s.groups for i in g], dtype=np.int64)
+        self.group_sizes = np.array([len(g) for g in s.groups], dtype=np.int64)
+        self.bits = np.array(
+            [max(1, math.ceil(math.log2(lv))) for _, lv in s.levels], dtype=np.int64
+        )
+        self.compass_in_state = bool(s.cfg.compass.in_state)
+        self.raw = np.empty(self.n_raw)
+        self.rays = np.empty(self.ray_offsets.shape)
+        self.eow_k = np.empty(s.n_camera, np.int64)
+        self.out = np.empty(self.n_raw)
+        self.codes = np.empty(len(self.bits), np.int64)
+        self.pose = (0.0, 0.0, 0.0)
+
+    def key(self, codes: Sequence[int]) -> int:
+        """The state key of ``codes`` (same as ``KeywordLayout.state_key``)."""
+        key = 0
+        for code, b in zip(codes, self.bits.tolist()):
+            key = (key << b) | code
+        return key
+
+    def sense(
+        self, x: float, y: float, h: float, raw: np.ndarray, rays: np.ndarray, eow_k: np.ndarray
+    ) -> None:
+        sense_one(
+            float(x),
+            float(y),
+            float(h),
+            self.ray_offsets,
+            self.params,
+            self.camera_dirs,
+            self.goal,
+            self.markers,
+            self.walls,
+            raw,
+            rays,
+            eow_k,
+        )
+
+    def sense_readout(
+        self, pose: tuple[float, float, float], rng: np.random.Generator
+    ) -> tuple[int, bool, bool]:
+        x, y, h = pose
+        self.pose = pose
+        self.sense(x, y, h, self.raw, self.rays, self.eow_k)
+        draws = self.suite.draw_noise(rng, self.n_raw)
+        return readout(
+            self.raw,
+            draws,
+            self.fracs,
+            self.suite.n_sonar,
+            self.limits,
+            self.suite.sonar_thresholds,
+            self.suite.camera_thresholds,
+            self.group_members,
+            self.group_sizes,
+            self.bits,
+            self.compass_in_state,
+            self.out,
+            self.eow_k,
+            self.codes,
+        )
+
+    def last_readings(self) -> tuple[Readings, tuple[int, ...]]:
+        """:class:`Readings` and codes of the last :meth:`sense_readout` (copies)."""
+        n, m = self.suite.n_sonar, self.suite.n_camera
+        out = self.out.copy()
+        r = Readings(
+            sonar=out[:n],
+            goal=out[n : n + m],
+            eow=out[n + m : n + 2 * m],
+            compass=float(out[-1]),
+            rays=self.rays.copy(),
+            eow_target=self.eow_k.tolist(),
+        )
+        return r, tuple(int(c) for c in self.codes)
 
 
 def sonar_ray_offsets(angles_deg: Sequence[float], arc_deg: float, sub_arcs: int) -> np.ndarray:
