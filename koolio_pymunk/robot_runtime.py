@@ -379,8 +379,8 @@ class Policy:
         ``max(NextQ)`` is 0 after a terminal step (goal, end of world). ``alpha`` and
         ``gamma`` default to the file's ``learner`` values.
         """
-        alpha = float(self.learner["alpha"] if alpha is None else alpha)
-        gamma = float(self.learner["gamma"] if gamma is None else gamma)
+        alpha = self._setting("alpha", alpha)
+        gamma = self._setting("gamma", gamma)
         if not 0 <= action < self.layout.n_actions:
             raise PolicyError(
                 f"action: {action!r} is not an action (0..{self.layout.n_actions - 1})"
@@ -393,6 +393,13 @@ class Policy:
             target = reward + gamma * (max(nxt) if nxt is not None else self.q_init)
         row[action] += alpha * (target - row[action])
         return row[action]
+
+    def _setting(self, name: str, value: float | None) -> float:
+        if value is not None:
+            return float(value)
+        if name not in self.learner:
+            raise PolicyError(f"learner.{name}: not in the policy file (pass {name}=...)")
+        return float(self.learner[name])
 
     # -- rewards (paper §5.4.7) -------------------------------------------------------
     def bump(self, sonar: Sequence[float]) -> bool:

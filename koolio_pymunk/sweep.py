@@ -555,7 +555,8 @@ def run_sweep(
 
     ``ray_address`` None runs on local processes; ``""`` on Ray (the running instance if
     ``ray.init`` was called, else a new local one); otherwise on the cluster at that
-    address.
+    address. Local workers are started with ``spawn``: a script calling this must do so
+    under ``if __name__ == "__main__":``.
     """
     from .qtable import atomic_write
 

@@ -188,6 +188,7 @@ def test_greedy_learner_does_not_update_or_save(policy_file, tmp_path):
         (lambda p: p.encode([float("nan")] * 8, [None] * 3, [None] * 3), "sonar[0]: not a"),
         (lambda p: p.state_key((0, 1)), "state: expected 12 codes, got 2"),
         (lambda p: p.update(0, 5, 1.0, 0, True), "action: 5 is not an action (0..4)"),
+        (lambda p: p.learner.clear() or p.update(0, 1, 1.0, 0, True), "learner.alpha: not in"),
     ],
 )
 def test_bad_arguments_raise_policy_errors(policy_file, call, message):
