@@ -338,6 +338,7 @@ def plan(spec: SweepSpec) -> list[dict[str, Any]]:
             label = _label(variant.get("name"), combo if variant.get("name") else params)
             arena = str(params.pop("arena", spec.arena))
             goal = params.pop("goal", spec.goal)
+            goal = None if goal is None else str(goal)
             overrides = _deep_merge(expand_dotted(spec.base), expand_dotted(params))
             try:
                 cfg = load_config(spec.config_path, overrides)
@@ -362,8 +363,9 @@ def plan(spec: SweepSpec) -> list[dict[str, Any]]:
                 "eval_episodes": spec.eval_episodes,
                 "competence": spec.competence,
             }
+            hashed = {**settings, "arena_content": repr(arena_obj)}
             digest = hashlib.sha256(
-                json.dumps(settings, sort_keys=True, default=str).encode()
+                json.dumps(hashed, sort_keys=True, default=str).encode()
             ).hexdigest()[:8]
             config_id = f"{_slug(label)}-{digest}"
             if config_id in seen:
@@ -409,8 +411,8 @@ def _slug(label: str) -> str:
 def run_one(task: dict[str, Any]) -> dict[str, Any]:
     """Train and evaluate one run in a private temporary folder.
 
-    Returns ``{"row": result row, "files": {name: bytes}, "checkpoints": [...]}``; the
-    driver writes the files. Depends only on the task (never on the process or node).
+    Returns ``{"row": result row, "files": {name: bytes}}``; the driver writes the
+    files. Depends only on the task (never on the process or node).
     """
     import tempfile
 

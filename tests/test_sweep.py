@@ -104,7 +104,7 @@ def test_spec_grid_and_runs_make_configurations(tmp_path):
         {
             "episodes": 5,
             "seeds": 2,
-            "goal": "302",
+            "goal": 302,
             "base": {"actions": {"move_action_distance": 6}},
             "grid": {"learner.gamma": [0.9, 0.99], "robot.profile": ["koolio", "tjpro"]},
             "runs": [{"name": "a"}, {"name": "b", "rewards": {"bump": -3}, "goal": "random"}],
