@@ -261,6 +261,8 @@ class Policy:
         self.rewards: dict[str, float] = dict(doc.get("rewards") or {})
         self.q_init = float(doc["q_init"])
         self.episodes = int(doc["episodes"])
+        names = doc.get("actions") or ACTION_NAMES
+        self.actions = [str(n) for n in names][: self.layout.n_actions]
         self.extra = {k: v for k, v in doc.items() if k not in _KNOWN_KEYS}
         self.rows: dict[int, list[float]] = {}
         ab = self.layout.action_bits
@@ -296,7 +298,7 @@ class Policy:
             "version": VERSION,
             "written_by": written_by,
             "layout": self.layout.to_json(),
-            "actions": list(ACTION_NAMES[: self.layout.n_actions]),
+            "actions": self.actions,
             "encoding": encoding_json(self.encoder),
             "sensors": self.sensors,
             "learner": self.learner,
