@@ -13,7 +13,7 @@ all threads, so drawing counts). On an idle machine the two agree; on a shared m
 other processes stretch wall times at random, so the ratio is computed on CPU time
 (``--clock wall`` to use wall time instead).
 
-    SDL_VIDEODRIVER=dummy .venv/bin/python tools/view_bench.py --arena hallway --episodes 20
+    SDL_VIDEODRIVER=dummy .venv/bin/python tools/view_bench.py --arena hallway --episodes 100
 
 Without a display, SDL_VIDEODRIVER defaults to ``dummy`` here (pygame still draws every
 frame into the window surface; only the final copy to a screen is skipped).
@@ -80,7 +80,7 @@ def run_view(
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--arena", default="hallway")
-    p.add_argument("--episodes", type=int, default=20)
+    p.add_argument("--episodes", type=int, default=100)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--repeat", type=int, default=2, help="interleaved runs of each (best kept)")
     p.add_argument("--size", default="1280x800")

@@ -12,8 +12,9 @@ panels; on the right the control panel (pygame-gui buttons, check boxes and a sl
 Every control has a keyboard shortcut (F1 shows them).
 
 Pacing: with the clock, steps run at the slider's rate (steps per second). Clockless
-runs ``episode.clockless_loop_count`` steps per tick back to back and draws at most
-:data:`DRAW_FPS` times a second, so drawing does not throttle learning. Under
+runs ``episode.clockless_loop_count`` steps per tick back to back and redraws at most
+:data:`DRAW_FPS` times a second and within :data:`DRAW_BUDGET` of the wall time, so
+drawing does not throttle learning. Under
 ``SDL_VIDEODRIVER=dummy`` nobody watches: there is no pacing at all (one tick per frame)
 and the run must be bounded by ``--steps`` or ``--episodes``.
 """
@@ -31,8 +32,11 @@ from typing import Any
 
 from ..errors import KoolioError
 
-#: The screen is redrawn at most this often (frames per second) while stepping.
+#: The screen is redrawn at most this often (frames per second).
 DRAW_FPS = 30
+#: Clockless: redraws take at most this share of the wall time (fewer frames per second
+#: when a redraw is slow or the machine is busy), so drawing never throttles learning.
+DRAW_BUDGET = 0.05
 #: Frame rate of the loop while paused or pacing with the clock.
 IDLE_FPS = 60
 #: Clock speed slider: steps per second from SPEED_MIN to SPEED_MAX (logarithmic).
@@ -41,6 +45,8 @@ DEFAULT_SIZE = (1280, 800)
 MIN_SIZE = (1080, 700)
 PANEL_W = 230
 CURVE_WINDOW = 25
+#: While stepping, the learning curve is redrawn at most this often (seconds).
+CURVE_INTERVAL = 0.5
 
 HELP_LINES: list[tuple[str, str]] = [
     ("Space", "Begin / Pause"),
@@ -337,6 +343,8 @@ class ViewerApp:
         self.steps_done = 0
         self.frames_drawn = 0
         self._last_draw = -math.inf
+        self._last_draw_done = time.perf_counter()
+        self._draw_cost = 0.0
         self._last_time = time.perf_counter()
         self._debt = 0.0
         self._rate = 0.0
@@ -346,7 +354,11 @@ class ViewerApp:
         self._mouse: tuple[int, int] | None = None
         self._curve_key: tuple[int, int] | None = None
         self._curve_surf: pygame.Surface | None = None
+        self._curve_time = -math.inf
         self._clock = pygame.time.Clock()
+        from .render import ArenaLayer
+
+        self._layers = (ArenaLayer(), ArenaLayer())  # overview, arena view
         self.fit_view()
         self.manager = pygame_gui.UIManager(size)
         self._build_controls()
@@ -673,10 +685,15 @@ class ViewerApp:
         if now - self._rate_t >= 0.5:
             self._rate = self._rate_steps / (now - self._rate_t)
             self._rate_t, self._rate_steps = now, 0
-        if shot or now - self._last_draw >= self.draw_interval:
+        interval = self.draw_interval
+        if self.clockless and self.running:
+            interval = max(interval, self._draw_cost / DRAW_BUDGET)
+        if shot or now - self._last_draw >= interval:
             self._last_draw = now
-            self.manager.update(min(0.1, self.draw_interval))
-            self.draw()
+            self.manager.update(min(0.1, now - self._last_draw_done))
+            self.draw(full=shot)
+            self._last_draw_done = time.perf_counter()
+            self._draw_cost = self._last_draw_done - now
         if shot:
             self.shots += 1
             assert self.shot_dir is not None
@@ -721,21 +738,23 @@ class ViewerApp:
             out.append("PAUSED")
         return out
 
-    def draw(self) -> None:
-        """Draw the whole window and flip it."""
+    def draw(self, full: bool = True) -> None:
+        """Draw the whole window and flip it. The loop passes ``full=False``: the
+        learning curve is then redrawn at most every :data:`CURVE_INTERVAL` seconds."""
         from . import hud
         from .render import draw_env
 
         pg, screen, lay = self.pg, self.screen, self.layout
-        screen.fill((200, 204, 212))
         if self.follow:
             self._follow_robot()
         drawn: dict[str, Any] = {}
         if self.overview_cam is not None:
-            draw_env(screen, self.overview_cam, self.env, lines=False)
+            draw_env(screen, self.overview_cam, self.env, lines=False, layer=self._layers[0])
             self._draw_view_box()
             pg.draw.rect(screen, hud.PANEL_EDGE, pg.Rect(lay.overview), width=1)
-        draw_env(screen, self.camera, self.env, show_sensors=self.show_sensors)
+        draw_env(
+            screen, self.camera, self.env, show_sensors=self.show_sensors, layer=self._layers[1]
+        )
         pg.draw.rect(screen, hud.PANEL_EDGE, pg.Rect(lay.main), width=1)
         drawn["tags"] = hud.draw_tags(screen, (lay.main[0] + 8, lay.main[1] + 8), self.tags())
         if self.show_hud:
@@ -744,7 +763,7 @@ class ViewerApp:
             hud.panel(screen, pg.Rect(lay.hud), "HUD hidden [H]")
         if self.show_stats:
             drawn["stats"] = hud.draw_stats(screen, pg.Rect(lay.stats), self.session, self._rate)
-            screen.blit(self._curve(), lay.curve[:2])
+            screen.blit(self._curve(full), lay.curve[:2])
         else:
             hud.panel(screen, pg.Rect(lay.stats), "Stats hidden [T]")
             hud.panel(screen, pg.Rect(lay.curve), "")
@@ -770,14 +789,17 @@ class ViewerApp:
         pg.draw.rect(self.screen, (0, 120, 200), box, width=2)
         self.screen.set_clip(clip)
 
-    def _curve(self) -> Any:
+    def _curve(self, full: bool = True) -> Any:
         """The learning-curve panel, redrawn only when a new episode has finished."""
         from . import hud
 
         pg = self.pg
         st = self.session.stats
         key = (len(st.returns), st.run_start)
-        if self._curve_surf is None or key != self._curve_key:
+        now = time.perf_counter()
+        due = full or now - self._curve_time >= CURVE_INTERVAL
+        if self._curve_surf is None or (key != self._curve_key and due):
+            self._curve_time = now
             _, _, w, h = self.layout.curve
             surf = pg.Surface((w, h))
             hud.draw_curve(surf, pg.Rect(0, 0, w, h), st.returns, st.run_start, CURVE_WINDOW)

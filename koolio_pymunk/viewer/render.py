@@ -19,6 +19,7 @@ from ..env import KoolioEnv
 from ..world import ACTION_NAMES
 from .camera import Camera
 from .draw import (
+    BACKGROUND,
     ROBOT_PLAIN,
     ROBOT_STATES,
     draw_arena,
@@ -47,14 +48,17 @@ def draw_env(
     show_sensors: bool = True,
     labels: bool = True,
     lines: bool = True,
+    layer: ArenaLayer | None = None,
 ) -> None:
     """Arena, then (with ``show_sensors``) the sensor lines, then the robot, in the
     camera's viewport. With ``show_sensors`` the robot has the paper's state colour (and
     ``lines=False`` leaves the sensor lines out, for a small overview); without it the
-    robot is drawn plain blue."""
-    draw_arena(
-        surface, env.world_arena, camera, labels=labels, robot_radius=env.config.robot.radius
-    )
+    robot is drawn plain blue. With a ``layer`` the arena comes from its cache."""
+    radius = env.config.robot.radius
+    if layer is not None:
+        layer.draw(surface, env.world_arena, camera, labels=labels, robot_radius=radius)
+    else:
+        draw_arena(surface, env.world_arena, camera, labels=labels, robot_radius=radius)
     clip = surface.get_clip()
     surface.set_clip(pygame.Rect(camera.viewport))
     pose = env.world.pose(0)
@@ -66,6 +70,64 @@ def draw_env(
         colour = ROBOT_PLAIN
     draw_robot(surface, camera, pose, env.config.robot.radius, colour)
     surface.set_clip(clip)
+
+
+class ArenaLayer:
+    """The arena drawn once per zoom level, then blitted every frame.
+
+    Walls, zones, doors and their labels do not move, so the window draws them into an
+    off-screen surface covering the whole arena at the camera's zoom and copies the
+    visible part; the surface is redrawn when the zoom or the arena (its active goal)
+    changes. The cache surface has its own :class:`Camera` with the same zoom, so the
+    picture matches a direct :func:`draw_arena` to within a pixel of rounding. Beyond
+    :attr:`MAX_PIXELS` (deep zoom on a long arena) it draws directly instead.
+    """
+
+    MAX_PIXELS = 6_000_000
+
+    def __init__(self) -> None:
+        self._key: tuple | None = None
+        self._arena: object = None
+        self._surface: pygame.Surface | None = None
+        self._camera: Camera | None = None
+
+    def draw(
+        self,
+        surface: pygame.Surface,
+        arena,
+        camera: Camera,
+        *,
+        labels: bool = True,
+        robot_radius: float = 10.0,
+    ) -> None:
+        key = (camera.zoom, labels, robot_radius)
+        if key != self._key or arena is not self._arena:
+            self._build(arena, camera.zoom, labels, robot_radius)
+            self._key, self._arena = key, arena
+        view = pygame.Rect(camera.viewport)
+        if self._surface is None or self._camera is None:
+            draw_arena(surface, arena, camera, labels=labels, robot_radius=robot_radius)
+            return
+        clip = surface.get_clip()
+        surface.set_clip(view)
+        surface.fill(BACKGROUND, view)
+        cx, cy = camera.to_screen(self._camera.center)
+        w, h = self._surface.get_size()
+        surface.blit(self._surface, (cx - w // 2, cy - h // 2))
+        surface.set_clip(clip)
+
+    def _build(self, arena, zoom: float, labels: bool, robot_radius: float) -> None:
+        xmin, ymin, xmax, ymax = arena.bounds()
+        margin = max(4.0 * robot_radius, 48.0 / zoom)  # zone discs, outside labels
+        w = 2 * (round((xmax - xmin + 2 * margin) * zoom) // 2 + 1)
+        h = 2 * (round((ymax - ymin + 2 * margin) * zoom) // 2 + 1)
+        if w * h > self.MAX_PIXELS:
+            self._surface = self._camera = None
+            return
+        self._camera = Camera((0, 0, w, h), ((xmin + xmax) / 2.0, (ymin + ymax) / 2.0), zoom)
+        self._camera.min_zoom = self._camera.max_zoom = zoom
+        self._surface = pygame.Surface((w, h))
+        draw_arena(self._surface, arena, self._camera, labels=labels, robot_radius=robot_radius)
 
 
 def arena_bounds(env: KoolioEnv) -> tuple[float, float, float, float]:
