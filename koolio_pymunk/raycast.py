@@ -9,8 +9,9 @@ The sensors need two geometric answers (see :mod:`koolio_pymunk.sensors`):
   to ``(tx, ty)`` (a wall whose *line* crosses it beyond the segment's ends does not block).
 
 :class:`PymunkRays` answers with ``space.segment_query_first`` (radius 0, walls only): the
-reference. :class:`FastRays` answers with numba-compiled loops over a ``(n_walls, 6)``
-array ``[ax, ay, bx, by, nx, ny]`` built once per world from pymunk's own wall shapes.
+reference. :class:`FastRays` answers with numba-compiled loops over a ``(n_walls, 10)``
+array (endpoints, unit normal, bounding box: :func:`wall_array`) built once per world from
+pymunk's own wall shapes.
 
 **What the kernel computes.** :func:`_first_alpha` is Chipmunk's
 ``cpSegmentShapeSegmentQuery`` for a segment of radius 0, operation for operation (the
@@ -18,15 +19,16 @@ same float64 expressions in the same order, with pymunk's stored unit normal), a
 the smallest ``alpha < 1`` over all walls, as ``cpSpaceSegmentQueryFirst`` does. Ray ends
 are ``x + length * cos(angle)`` as the reference computes them, and :func:`hypot` is a
 double-double ``sqrt(dx^2 + dy^2)`` that reproduces CPython's correctly rounded
-``math.hypot``. Walls whose bounding box lies farther than ``length + 1`` from the ray's
-start in x or y are skipped (they cannot be hit; the result does not change).
+``math.hypot``. Walls are culled by bounding box (they cannot be hit, so the result
+does not change): first those beyond the sonar range, then, per sonar, those outside the
+box of its rays (grown by 1 in).
 :func:`sense_one` fuses a whole sensor reading (every sonar sub-arc ray, every camera's
 arc test and line of sight, the compass) into one call; :func:`sense_batch` does it for
 many robots at once.
 
 **How it was checked.** ``tests/test_raycast.py`` compares both engines and the fused
 kernel with the pymunk path on random poses in every shipped arena (identical encoded
-states, distances within 1e-6 in); ``tools/bench.py --agreement`` does it on 100k poses per
+states, distances within 1e-6 in); ``tools/agreement.py`` does it on 100k poses per
 arena and prints the mismatch counts (0 on this machine; distances agreed bit for bit,
 see ``docs/speed.md``). Two cases of Chipmunk's query are left out because a robot's
 centre never meets them: a ray that *starts* on a wall (Chipmunk returns alpha 0) and
@@ -47,16 +49,41 @@ TWO_PI = 2.0 * math.pi
 _SPLIT = 134217729.0
 #: Extra reach (inches) when culling walls by bounding box: far above any rounding.
 _CULL_MARGIN = 1.0
+#: Columns of :func:`wall_array`.
+WALL_COLUMNS = 10
 
 
 def wall_array(world: World) -> np.ndarray:
-    """``(n_walls, 6)`` float64 rows ``[ax, ay, bx, by, nx, ny]`` of the world's walls.
+    """``(n_walls, 10)`` float64 rows ``[ax, ay, bx, by, nx, ny, xmin, ymin, xmax, ymax]``
+    of the world's walls (endpoints, unit normal, bounding box).
 
     Endpoints and unit normals are read from pymunk's shapes, so the kernel uses the very
     numbers Chipmunk uses (walls sit on the static body: world and body frames agree).
     """
-    rows = [(s.a.x, s.a.y, s.b.x, s.b.y, s.normal.x, s.normal.y) for s in world.walls]
-    return np.ascontiguousarray(np.array(rows, dtype=np.float64).reshape(-1, 6))
+    rows = [
+        (
+            s.a.x,
+            s.a.y,
+            s.b.x,
+            s.b.y,
+            s.normal.x,
+            s.normal.y,
+            min(s.a.x, s.b.x),
+            min(s.a.y, s.b.y),
+            max(s.a.x, s.b.x),
+            max(s.a.y, s.b.y),
+        )
+        for s in world.walls
+    ]
+    return np.ascontiguousarray(np.array(rows, dtype=np.float64).reshape(-1, WALL_COLUMNS))
+
+
+def new_trig(n_rays: int, n_robots: int | None = None) -> np.ndarray:
+    """An empty heading/trigonometry cache for :func:`sense_one` (one row per robot)."""
+    shape = (1 + 2 * n_rays,) if n_robots is None else (n_robots, 1 + 2 * n_rays)
+    out = np.zeros(shape)
+    out[..., 0] = np.nan  # no heading cached yet (NaN equals nothing)
+    return out
 
 
 # -- kernels -------------------------------------------------------------------------------
@@ -133,19 +160,39 @@ def _first_alpha(
 
 
 @numba.njit(cache=True)
+def _walls_in_box(
+    x0: float,
+    y0: float,
+    x1: float,
+    y1: float,
+    walls: np.ndarray,
+    candidates: np.ndarray,
+    n_candidates: int,
+    active: np.ndarray,
+) -> int:
+    """Fill ``active`` with the walls among ``candidates[:n]`` whose bounding box meets
+    the box ``[x0, x1] x [y0, y1]`` grown by the cull margin; returns how many. A ray
+    lying inside the box cannot hit the others."""
+    n = 0
+    for j in range(n_candidates):
+        w = walls[candidates[j]]
+        if w[6] - _CULL_MARGIN > x1 or w[8] + _CULL_MARGIN < x0:
+            continue
+        if w[7] - _CULL_MARGIN > y1 or w[9] + _CULL_MARGIN < y0:
+            continue
+        active[n] = candidates[j]
+        n += 1
+    return n
+
+
+@numba.njit(cache=True)
 def _near_walls(x: float, y: float, reach: float, walls: np.ndarray, active: np.ndarray) -> int:
     """Fill ``active`` with the walls whose bounding box comes within ``reach`` of
     ``(x, y)`` in both x and y; returns how many."""
-    n = 0
-    for j in range(walls.shape[0]):
-        w = walls[j]
-        if min(w[0], w[2]) - reach > x or max(w[0], w[2]) + reach < x:
-            continue
-        if min(w[1], w[3]) - reach > y or max(w[1], w[3]) + reach < y:
-            continue
-        active[n] = j
-        n += 1
-    return n
+    everything = np.arange(walls.shape[0])
+    return _walls_in_box(
+        x - reach, y - reach, x + reach, y + reach, walls, everything, walls.shape[0], active
+    )
 
 
 @numba.njit(cache=True)
@@ -159,7 +206,7 @@ def _all_walls(walls: np.ndarray, active: np.ndarray) -> int:
 def cast(x: float, y: float, angles: np.ndarray, length: float, walls: np.ndarray) -> np.ndarray:
     """Centre distance of the first wall along each ray (``length`` when none)."""
     active = np.empty(walls.shape[0], np.int64)
-    n = _near_walls(x, y, length + _CULL_MARGIN, walls, active)
+    n = _near_walls(x, y, length, walls, active)
     flat = angles.ravel()
     out = np.empty(flat.size)
     for i in range(flat.size):
@@ -224,6 +271,7 @@ def sense_one(
     raw: np.ndarray,
     rays: np.ndarray,
     eow_k: np.ndarray,
+    trig: np.ndarray,
 ) -> None:
     """One noise-free reading of every sensor of a robot at ``(x, y, h)``.
 
@@ -231,6 +279,9 @@ def sense_one(
     Writes ``raw`` = sonar edge distances, goal per camera, end-of-world per camera,
     compass units (what ``SensorSuite`` noises next), ``rays`` = every sub-arc ray's
     centre distance and ``eow_k`` = the marker each camera sees (-1: none).
+    ``trig`` (``1 + 2 * rays`` floats) caches the heading it holds and every ray's
+    ``cos`` and ``sin`` at that heading: moves and stops keep the heading, so only
+    rotations pay for the trigonometry (the values are the same either way).
     """
     length = params[0]
     radius = params[1]
@@ -238,15 +289,34 @@ def sense_one(
     half_arc = params[3]
     n_sonar, n_sub = ray_offsets.shape
     n_cam = camera_dirs.shape[0]
+    n_rays = n_sonar * n_sub
+    if trig[0] != h:
+        for s in range(n_sonar):
+            for i in range(n_sub):
+                angle = h + ray_offsets[s, i]
+                trig[1 + s * n_sub + i] = math.cos(angle)
+                trig[1 + n_rays + s * n_sub + i] = math.sin(angle)
+        trig[0] = h
+    near = np.empty(walls.shape[0], np.int64)
+    n_near = _near_walls(x, y, length, walls, near)
     active = np.empty(walls.shape[0], np.int64)
-    n = _near_walls(x, y, length + _CULL_MARGIN, walls, active)
+    ends = np.empty((n_sub, 2))
     for s in range(n_sonar):
+        x0 = x1 = x
+        y0 = y1 = y
+        for i in range(n_sub):
+            ex = x + length * trig[1 + s * n_sub + i]
+            ey = y + length * trig[1 + n_rays + s * n_sub + i]
+            ends[i, 0] = ex
+            ends[i, 1] = ey
+            x0 = min(x0, ex)
+            x1 = max(x1, ex)
+            y0 = min(y0, ey)
+            y1 = max(y1, ey)
+        n = _walls_in_box(x0, y0, x1, y1, walls, near, n_near, active)
         nearest = np.inf
         for i in range(n_sub):
-            angle = h + ray_offsets[s, i]
-            ex = x + length * math.cos(angle)
-            ey = y + length * math.sin(angle)
-            d = _first_alpha(x, y, ex - x, ey - y, walls, active, n) * length
+            d = _first_alpha(x, y, ends[i, 0] - x, ends[i, 1] - y, walls, active, n) * length
             rays[s, i] = d
             nearest = min(nearest, d)
         raw[s] = far if nearest > length - 1e-9 else nearest - radius
@@ -274,9 +344,10 @@ def sense_batch(
     raw: np.ndarray,
     rays: np.ndarray,
     eow_k: np.ndarray,
+    trig: np.ndarray,
 ) -> None:
     """:func:`sense_one` for robot ``r`` at ``(xs[r], ys[r], hs[r])`` with goal
-    ``goals[r]``, writing row ``r`` of ``raw``, ``rays`` and ``eow_k``."""
+    ``goals[r]``, writing row ``r`` of ``raw``, ``rays``, ``eow_k`` and ``trig``."""
     for r in range(xs.shape[0]):
         sense_one(
             xs[r],
@@ -291,6 +362,7 @@ def sense_batch(
             raw[r],
             rays[r],
             eow_k[r],
+            trig[r],
         )
 
 

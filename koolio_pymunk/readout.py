@@ -123,3 +123,46 @@ def readout(
         if out[s] < sonar_thresholds[0]:
             bump = True
     return key, bump, out[n_sonar] < camera_thresholds[0]
+
+
+@numba.njit(cache=True)
+def readout_batch(
+    raw: np.ndarray,
+    draws: np.ndarray,
+    fracs: np.ndarray,
+    n_sonar: int,
+    limits: np.ndarray,
+    sonar_thresholds: np.ndarray,
+    camera_thresholds: np.ndarray,
+    group_members: np.ndarray,
+    group_sizes: np.ndarray,
+    bits: np.ndarray,
+    compass_in_state: bool,
+    out: np.ndarray,
+    eow_k: np.ndarray,
+    codes: np.ndarray,
+    keys: np.ndarray,
+    flags: np.ndarray,
+) -> None:
+    """:func:`readout` of row ``r`` of ``raw``/``draws`` for every robot ``r``: writes
+    ``keys[r]``, ``flags[r, 0]`` (Bump) and ``flags[r, 1]`` (goal close)."""
+    for r in range(raw.shape[0]):
+        key, bump, close = readout(
+            raw[r],
+            draws[r],
+            fracs,
+            n_sonar,
+            limits,
+            sonar_thresholds,
+            camera_thresholds,
+            group_members,
+            group_sizes,
+            bits,
+            compass_in_state,
+            out[r],
+            eow_k[r],
+            codes[r],
+        )
+        keys[r] = key
+        flags[r, 0] = bump
+        flags[r, 1] = close

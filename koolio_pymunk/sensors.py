@@ -49,7 +49,7 @@ import numpy as np
 
 from .arena import Point
 from .config import SensorConfig
-from .raycast import make_engine, sense_one
+from .raycast import make_engine, new_trig, sense_one
 from .readout import readout
 from .world import World
 
@@ -308,6 +308,7 @@ class KernelInputs:
         self.eow_k = np.empty(s.n_camera, np.int64)
         self.out = np.empty(self.n_raw)
         self.codes = np.empty(len(self.bits), np.int64)
+        self.trig = new_trig(self.ray_offsets.size)
         self.pose = (0.0, 0.0, 0.0)
 
     def key(self, codes: Sequence[int]) -> int:
@@ -333,6 +334,7 @@ class KernelInputs:
             raw,
             rays,
             eow_k,
+            self.trig,
         )
 
     def sense_readout(

@@ -46,6 +46,11 @@ ROBOT_CATEGORY = 0b10
 WALL_ONLY = pymunk.ShapeFilter(mask=WALL_CATEGORY)
 #: Non-zero group shared by all robots: shapes in one group never collide.
 ROBOT_GROUP = 1
+#: A robot's filter: it collides with walls only.
+SOLID = pymunk.ShapeFilter(group=ROBOT_GROUP, categories=ROBOT_CATEGORY, mask=WALL_CATEGORY)
+#: With several robots, sleeping is enabled with this threshold: nothing falls asleep by
+#: itself; :meth:`World.act` puts the robots that do not move to sleep (see there).
+NEVER_AUTO_SLEEP = 1e300
 #: pymunk's allowed overlap: the most a robot may sink into a wall, inches.
 COLLISION_SLOP = 0.01
 TWO_PI = 2.0 * math.pi
@@ -68,6 +73,11 @@ class Action(IntEnum):
     FORWARD = 3
     REVERSE = 4
 
+
+_ROTATE_LEFT = int(Action.ROTATE_LEFT)
+_ROTATE_RIGHT = int(Action.ROTATE_RIGHT)
+_FORWARD = int(Action.FORWARD)
+_REVERSE = int(Action.REVERSE)
 
 ACTION_NAMES = ("Stop", "RotateLeft", "RotateRight", "Forward", "Reverse")
 
@@ -97,6 +107,10 @@ class World:
         for _ in range(n_robots):
             self._add_robot()
         self.heading = [0.0] * n_robots
+        self.awake = list(range(n_robots))
+        """Robots whose bodies are awake (all of them with one robot)."""
+        if n_robots > 1:
+            self.space.sleep_time_threshold = NEVER_AUTO_SLEEP
 
     @classmethod
     def from_arena(cls, arena: Arena, radius: float, n_robots: int = 1) -> World:
@@ -114,9 +128,7 @@ class World:
         shape = pymunk.Circle(body, self.radius)
         shape.friction = 0.0
         shape.elasticity = 0.0
-        shape.filter = pymunk.ShapeFilter(
-            group=ROBOT_GROUP, categories=ROBOT_CATEGORY, mask=WALL_CATEGORY
-        )
+        shape.filter = SOLID
         self.space.add(body, shape)
         self.bodies.append(body)
         self.shapes.append(shape)
@@ -146,6 +158,8 @@ class World:
         body.velocity = (0.0, 0.0)
         self.heading[i] = heading % TWO_PI
         self.space.reindex_shapes_for_body(body)
+        if len(self.bodies) > 1 and i not in self.awake:
+            body.sleep()  # setting the position woke it: keep it out of others' moves
 
     # -- actions --------------------------------------------------------------------
     def act(self, actions: Sequence[int], distance: float, arc: float) -> None:
@@ -153,45 +167,69 @@ class World:
 
         All moving robots move together through the same pymunk sub-steps.
         """
-        moving = False
+        movers: list[int] = []
+        heading = self.heading
         for i, action in enumerate(actions):
-            if action == Action.ROTATE_LEFT:
-                self.heading[i] = (self.heading[i] + arc) % TWO_PI
-            elif action == Action.ROTATE_RIGHT:
-                self.heading[i] = (self.heading[i] - arc) % TWO_PI
-            elif action == Action.FORWARD or action == Action.REVERSE:
-                sign = 1.0 if action == Action.FORWARD else -1.0
-                h = self.heading[i]
+            if action == _ROTATE_LEFT:
+                heading[i] = (heading[i] + arc) % TWO_PI
+            elif action == _ROTATE_RIGHT:
+                heading[i] = (heading[i] - arc) % TWO_PI
+            elif action in (_FORWARD, _REVERSE):
+                sign = 1.0 if action == _FORWARD else -1.0
+                h = heading[i]
                 self.bodies[i].velocity = (
                     sign * distance * math.cos(h),
                     sign * distance * math.sin(h),
                 )
-                moving = True
-        if moving:
-            self._integrate(distance)
+                movers.append(i)
+        if movers:
+            self._wake_only(movers)
+            self._integrate(distance, movers)
 
     def move(self, i: int, distance: float) -> None:
         """Move robot ``i`` alone by ``distance`` along its heading (negative: backwards)."""
         h = self.heading[i]
         self.bodies[i].velocity = (distance * math.cos(h), distance * math.sin(h))
-        self._integrate(abs(distance))
+        self._wake_only([i])
+        self._integrate(abs(distance), [i])
 
-    def _integrate(self, distance: float) -> None:
+    def _wake_only(self, movers: list[int]) -> None:
+        """With several robots, only the robots that move are awake during a move.
+
+        A robot that does not move is at rest (zero velocity, no forces): stepping it
+        would leave it exactly where it is, so it sleeps instead (Chipmunk then neither
+        integrates it nor solves its wall contacts, which are kept for when it wakes).
+        Robots never touch each other (one shape group), so each sleeps alone. Only the
+        robots whose role changes are switched. One robot: nothing to do.
+        """
+        if len(self.bodies) == 1:
+            return
+        bodies, awake = self.bodies, set(movers)
+        for i in self.awake:
+            if i not in awake:
+                bodies[i].sleep()
+        for i in movers:
+            if bodies[i].is_sleeping:
+                bodies[i].activate()
+        self.awake = movers
+
+    def _integrate(self, distance: float, movers: list[int]) -> None:
         """Step the space one time unit in equal sub-steps, then settle at rest.
 
-        The sub-step is ``radius / 4`` of travel when no wall is within reach of this move
-        (pymunk's nearest-point query), else ``FINE_STEP``. The step size stays constant
-        within a move because Chipmunk warm-starts each contact with its last impulse
-        scaled by the ratio of successive time steps: a change of step would kick the
-        robot off the wall it slides along.
+        The sub-step is ``radius / 4`` of travel when no wall is within reach of a moving
+        robot (pymunk's nearest-point query), else ``FINE_STEP``. The step size stays
+        constant within a move because Chipmunk warm-starts each contact with its last
+        impulse scaled by the ratio of successive time steps: a change of step would kick
+        the robot off the wall it slides along.
         """
         if distance <= 0.0:
             return
         travel = self.radius / 4.0
         reach = distance + self.radius + travel
         query = self.space.point_query_nearest
-        for body in self.bodies:
-            if body.velocity != (0.0, 0.0) and query(body.position, reach, WALL_ONLY):
+        bodies = self.bodies
+        for i in movers:
+            if query(bodies[i].position, reach, WALL_ONLY):
                 travel = FINE_STEP
                 break
         n = max(1, math.ceil(distance / travel))
@@ -199,15 +237,19 @@ class World:
         step = self.space.step
         for _ in range(n):
             step(dt)
-        for body in self.bodies:
-            body.velocity = (0.0, 0.0)
+        self._stop()
         # Chipmunk detects contacts after integrating positions, so the last sub-step may
         # leave an overlap; with collision_bias 0 the next step removes all overlap beyond
         # the slop. Settle with the robots at rest.
         for _ in range(SETTLE_STEPS):
             step(dt)
-        for body in self.bodies:
-            body.velocity = (0.0, 0.0)
+        self._stop()
+
+    def _stop(self) -> None:
+        """Zero the velocity of every awake robot (sleeping ones are at rest)."""
+        bodies = self.bodies
+        for i in self.awake:
+            bodies[i].velocity = (0.0, 0.0)
 
     # -- geometry queries (for tests and the viewer) ----------------------------------
     def wall_clearance(self, i: int = 0) -> float:
