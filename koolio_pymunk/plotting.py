@@ -153,7 +153,6 @@ def plot_logs(logs: list[Log], out: str | Path, window: int = 50, title: str | N
         label = f"moving average ({window} episodes)" if single else f"{name}: return"
         ax_ret.plot(x, moving_average(log.reward, window), color=colour, lw=2.2, label=label)
         for key, text, c in OUTCOMES if single else OUTCOMES[:1]:
-            text = f"{text} (% of last {window})" if single else text
             rate = 100.0 * outcome_rate(log.outcome, key, window)
             ax_out.plot(
                 x, rate, color=c if single else colour, lw=2, label=text if single else name
@@ -178,9 +177,8 @@ def plot_logs(logs: list[Log], out: str | Path, window: int = 50, title: str | N
     handles_extra: list = []
     if single:
         eps = ax_out.twinx()
-        (line,) = eps.plot(
-            logs[0].episode + 1, logs[0].epsilon, color="black", ls=":", lw=1.4, label="epsilon"
-        )
+        x0, e0 = logs[0].episode + 1, logs[0].epsilon
+        (line,) = eps.plot(x0, e0, color="black", ls=":", lw=1.4, label="epsilon (right axis)")
         handles_extra.append(line)
         eps.set_ylabel("epsilon (dotted)")
         eps.set_ylim(0, max(0.05, float(logs[0].epsilon.max()) * 1.1))

@@ -348,7 +348,8 @@ class ViewerApp:
         self._last_time = time.perf_counter()
         self._debt = 0.0
         self._rate = 0.0
-        self._rate_t = self._last_time
+        self._rate_t: float | None = None
+        self._rate_full = False
         self._rate_steps = 0
         self._drag: tuple[int, int] | None = None
         self._mouse: tuple[int, int] | None = None
@@ -663,6 +664,16 @@ class ViewerApp:
         self._debt -= n
         return n
 
+    def _update_rate(self, now: float) -> None:
+        """Steps per second over half-second windows (over the run so far, at first)."""
+        if self._rate_t is None:  # the first frame's steps have no duration: skip them
+            self._rate_t, self._rate_steps = now, 0
+        elif now - self._rate_t >= 0.5:
+            self._rate = self._rate_steps / (now - self._rate_t)
+            self._rate_t, self._rate_steps, self._rate_full = now, 0, True
+        elif not self._rate_full and now > self._rate_t:
+            self._rate = self._rate_steps / (now - self._rate_t)
+
     def _do_steps(self, n: int) -> int:
         done = self.session.run(n)
         self.steps_done += done
@@ -682,9 +693,7 @@ class ViewerApp:
             n = min(n, self.shot_every - self.steps_done % self.shot_every)
         done = self._do_steps(n) if n > 0 else 0
         shot = bool(self.shot_every and done and self.steps_done % self.shot_every == 0)
-        if now - self._rate_t >= 0.5:
-            self._rate = self._rate_steps / (now - self._rate_t)
-            self._rate_t, self._rate_steps = now, 0
+        self._update_rate(now)
         interval = self.draw_interval
         if self.clockless and self.running:
             interval = max(interval, self._draw_cost / DRAW_BUDGET)
