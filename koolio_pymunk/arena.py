@@ -26,7 +26,6 @@ import contextlib
 import difflib
 import math
 import os
-import tempfile
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -36,6 +35,7 @@ import yaml
 
 from koolio_pymunk import geometry
 from koolio_pymunk.errors import ArenaError, located
+from koolio_pymunk.files import atomic_write_text
 
 Point = tuple[float, float]
 
@@ -682,22 +682,6 @@ def arena_to_yaml(arena: Arena, header: str = "") -> str:
     )
     lines = [ln if ln.startswith("#") else f"# {ln}".rstrip() for ln in header.splitlines()]
     return "\n".join(lines) + ("\n" if lines else "") + body
-
-
-def atomic_write_text(path: str | Path, text: str) -> None:
-    """Write ``text`` to a temp file beside ``path``, fsync it, then ``os.replace`` it."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
 
 
 def save_arena(arena: Arena, path: str | Path, header: str = "") -> None:

@@ -31,7 +31,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import struct
 import sys
 import zlib
@@ -43,6 +42,7 @@ from typing import Any
 import numpy as np
 
 from .errors import QTableError, located
+from .files import atomic_write
 
 MAGIC = b"KOOLIOQT"
 FORMAT_VERSION = 1
@@ -220,20 +220,6 @@ class QTable:
         values = np.frombuffer(data, dtype="<f8", count=n * na, offset=pos + 8 * n)
         rows = {int(k): values[i * na : (i + 1) * na].tolist() for i, k in enumerate(keys)}
         return cls(layout, header, q_init, rows)
-
-
-def atomic_write(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` so that a crash leaves either the old or the new file."""
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
-    try:
-        with open(tmp, "wb") as fh:
-            fh.write(data)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
 
 
 def backup_path(path: Path) -> Path:
