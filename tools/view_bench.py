@@ -54,7 +54,7 @@ def run_train(arena: str, episodes: int, seed: int, folder: Path) -> tuple[int, 
 
 
 def run_view(
-    arena: str, episodes: int, seed: int, folder: Path, size: tuple[int, int]
+    arena: str, episodes: int, seed: int, folder: Path, size: tuple[int, int], budget: float
 ) -> tuple[int, Timer, bytes, int, float]:
     from koolio_pymunk.env import KoolioEnv
     from koolio_pymunk.viewer.app import ViewerApp
@@ -66,6 +66,8 @@ def run_view(
     )
     app = ViewerApp(session, size=size, clockless=True, running=True, max_steps=None)
     app.headless = True  # stop when the episodes are done, even with a real window
+    if budget > 0:
+        app.draw_budget = budget
     with Timer() as t:
         app.run()
     frames = app.frames_drawn
@@ -85,6 +87,13 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--repeat", type=int, default=2, help="interleaved runs of each (best kept)")
     p.add_argument("--size", default="1280x800")
     p.add_argument("--clock", choices=("cpu", "wall"), default="cpu", help="time for the ratio")
+    p.add_argument(
+        "--budget",
+        type=float,
+        default=0.0,
+        help="share of wall time redraws may take (default: the window's own, 0.05); "
+        "1 = a plain 30 frames per second",
+    )
     args = p.parse_args(argv)
     os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
     os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
@@ -92,14 +101,15 @@ def main(argv: list[str] | None = None) -> int:
     best_train = best_view = 0.0
     print(
         f"view vs train: arena {args.arena}, {args.episodes} episodes, seed {args.seed}, "
-        f"window {args.size}, SDL_VIDEODRIVER={os.environ['SDL_VIDEODRIVER']}"
+        f"window {args.size}, SDL_VIDEODRIVER={os.environ['SDL_VIDEODRIVER']}, "
+        f"draw budget {args.budget or 'default'}"
     )
     for r in range(args.repeat):
         with tempfile.TemporaryDirectory() as tmp:
             folder = Path(tmp)
             steps_t, t_train, table_t = run_train(args.arena, args.episodes, args.seed, folder)
             steps_v, t_view, table_v, frames, draw_ms = run_view(
-                args.arena, args.episodes, args.seed, folder, size
+                args.arena, args.episodes, args.seed, folder, size, args.budget
             )
         if steps_t != steps_v or table_t != table_v:
             print("error: view and train did different work (tables differ)", file=sys.stderr)

@@ -13,8 +13,8 @@ Every control has a keyboard shortcut (F1 shows them).
 
 Pacing: with the clock, steps run at the slider's rate (steps per second). Clockless
 runs ``episode.clockless_loop_count`` steps per tick back to back and redraws at most
-:data:`DRAW_FPS` times a second and within :data:`DRAW_BUDGET` of the wall time, so
-drawing does not throttle learning. Under
+:data:`DRAW_FPS` times a second and within :data:`DRAW_BUDGET` of the wall time
+(``ViewerApp.draw_budget``), so drawing does not throttle learning. Under
 ``SDL_VIDEODRIVER=dummy`` nobody watches: there is no pacing at all (one tick per frame)
 and the run must be bounded by ``--steps`` or ``--episodes``.
 """
@@ -339,6 +339,7 @@ class ViewerApp:
         self.shot_every, self.shot_dir = screenshot_every or (0, None)
         self.shots = 0
         self.draw_interval = 1.0 / draw_fps
+        self.draw_budget = DRAW_BUDGET
         self.quit = False
         self.steps_done = 0
         self.frames_drawn = 0
@@ -696,7 +697,7 @@ class ViewerApp:
         self._update_rate(now)
         interval = self.draw_interval
         if self.clockless and self.running:
-            interval = max(interval, self._draw_cost / DRAW_BUDGET)
+            interval = max(interval, self._draw_cost / self.draw_budget)
         if shot or now - self._last_draw >= interval:
             self._last_draw = now
             self.manager.update(min(0.1, now - self._last_draw_done))
