@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import os
 import shutil
 import subprocess
@@ -248,12 +249,14 @@ def _pixels(image: pygame.Surface, colour: tuple[int, int, int]) -> list[tuple[i
 def test_test_drive_uses_the_core(tmp_path: Path) -> None:
     app = app_for(copy_room(tmp_path))
     run_lines(app, "drive forward 2\n")
-    x, y, h = app.drive.pose
-    assert (round(x, 6), round(y, 6), h) == (72.0, 48.0, 0.0)
-    assert app.drive.steps == 2 and app.message == "Forward: forward (-1)"
+    cfg = app.drive.env.config
+    d, arc = cfg.actions.move_action_distance, math.radians(cfg.actions.rotate_action_arc_deg)
+    assert app.drive.pose == pytest.approx((48 + 2 * d, 48, 0), abs=1e-9)  # start: (48, 48)
+    assert app.drive.steps == 2
+    assert app.message == f"Forward: forward, reward {cfg.rewards.forward:g}"
     run_lines(app, "key left\nkey up\nkey space\n")
-    x, y, h = app.drive.pose
-    assert (round(x, 3), round(y, 3), round(h, 6)) == (83.591, 51.106, 0.261799)
+    expected = (48 + 2 * d + d * math.cos(arc), 48 + d * math.sin(arc), arc)
+    assert app.drive.pose == pytest.approx(expected, abs=1e-9)
     assert app.drive.steps == 5
     run_lines(app, "key return\n")
     assert app.drive.pose == (48.0, 48.0, 0.0) and app.drive.steps == 0
@@ -340,3 +343,15 @@ def test_command_line_script_and_screenshot(tmp_path: Path) -> None:
         result.stderr
         == f"arena_editor: error: {script}:2: move_vertex: expected 3 arguments, got 4\n"
     )
+
+
+def test_the_documented_example_runs(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    doc = (REPO / "docs" / "editor.md").read_text()
+    example = doc[doc.index("new lab\n") : doc.index("screenshot lab.png\n")]
+    monkeypatch.chdir(tmp_path)
+    app = app_for()
+    run_lines(app, example + "screenshot lab.png\n")
+    assert load_arena("lab.yaml").walls == ((0, 0), (240, 0), (240, 192), (0, 192))
+    d = app.drive.env.config.actions.move_action_distance
+    assert app.drive.pose[:2] == pytest.approx((48 + 3 * d, 48))
+    assert (tmp_path / "lab.png").is_file()

@@ -164,6 +164,7 @@ class EditorApp:
         os.close(fd)
         try:
             pygame.image.save(self.screen, tmp)
+            os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600 files
             os.replace(tmp, path)
         except BaseException:
             if os.path.exists(tmp):
@@ -575,7 +576,7 @@ class EditorApp:
             if self.drive is None:
                 return None
         event = self.drive.step(action)
-        self.say(f"{self.drive.last_action}: {event} ({self.drive.last_reward:g})")
+        self.say(f"{self.drive.last_action}: {event}, reward {self.drive.last_reward:g}")
         return event
 
     def request_quit(self) -> None:
@@ -777,6 +778,12 @@ class EditorApp:
             name = f"{items.path_str(p)}[{i}]-{items.path_str(p)}[{(i + 1) % len(pts)}]"
             out += f"   {name} {view.fmt_len(math.dist(a, b), tile)}"
         return out
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
 
 
 # =========================================================================================

@@ -332,7 +332,8 @@ def draw_panel(app: EditorApp) -> None:
         size = f"   {xmax - xmin:g} x {ymax - ymin:g} in"
     w.line(f"arena: {arena.name}{size}", PANEL_TEXT)
     if arena.rotate_deg:
-        w.line(f"rotate_deg {arena.rotate_deg:g} (drawn unrotated)", PANEL_DIM)
+        frame = "simulator's frame" if app.drive is not None else "drawn unrotated"
+        w.line(f"rotate_deg {arena.rotate_deg:g} ({frame})", PANEL_DIM)
     w.gap()
     if app.drive is not None:
         _panel_drive(w, app)
