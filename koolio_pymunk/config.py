@@ -52,9 +52,10 @@ class RobotConfig:
 
 @dataclass
 class ActionConfig:
-    rotate_action_arc_deg: float = 15.0
+    rotate_action_arc_deg: float = 30.0
     """``RotateActionArc`` in degrees, added (RotateLeft) or subtracted (RotateRight).
-    The paper gives no value; 15 degrees (24 steps per full turn) is this project's."""
+    The paper gives no value; 30 degrees (12 steps per full turn) is this project's: with
+    15, turning round costs twice as many steps and learning needs far more episodes."""
     move_action_distance: float = 12.0
     """``MoveActionDistance`` in inches per Forward / Reverse. Not given by the paper;
     half a ceiling tile. Must not exceed the robot's diameter."""
@@ -145,7 +146,10 @@ class RewardConfig:
     """Any sonar reads Bump."""
     stop: float = -5.0
     """Stop anywhere else (as dear as a bump: stopping is only for deliveries)."""
-    reverse: float = -2.0
+    reverse: float = -10.0
+    """Dearer than the turn-around it would replace: facing the start's end-of-world
+    marker, Reverse - Forward - Reverse... is otherwise a cheap loop between an aliased
+    state and the marker's (measured: 89 % greedy goal rate for seed 1 with -2)."""
     turn: float = -1.0
     """RotateLeft or RotateRight."""
     forward: float = -0.5
@@ -201,8 +205,8 @@ class LearnerConfig:
     prefers an action it has not tried over a tried one worth more than -30 (with 0, a
     never-tried Stop wins for ever in a rarely seen state), and an action that loops
     (RotateLeft / RotateRight between two aliased states) sinks below -30 until the
-    untried alternative gets its turn. Measured: 96 / 91 / 95 % greedy goal rate for
-    seeds 0 / 1 / 2 after 800 episodes, against 72 % for seed 0 with 0."""
+    untried alternative gets its turn (measured with 15-degree turns, seed 0: 96 % greedy
+    goal rate after 800 episodes with -30, 72 % with 0)."""
 
 
 @dataclass

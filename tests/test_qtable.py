@@ -187,3 +187,14 @@ def test_atomic_write_keeps_old_file_when_replace_fails(tmp_path, monkeypatch) -
     monkeypatch.undo()
     assert store.path.read_bytes() == good
     assert [p.name for p in tmp_path.iterdir() if ".tmp" in p.name] == []
+
+
+def test_saved_files_get_normal_permissions(tmp_path) -> None:
+    store = QTableStore(tmp_path / "q.qtable")
+    store.open(LAYOUT, SENSORS, 0.0)
+    umask = os.umask(0)
+    os.umask(umask)
+    assert store.path.stat().st_mode & 0o777 == 0o666 & ~umask
+    store.path.chmod(0o640)
+    store.save(_table())
+    assert store.path.stat().st_mode & 0o777 == 0o640  # an existing file keeps its mode

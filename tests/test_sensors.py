@@ -113,9 +113,11 @@ def test_camera_sees_goal_in_arc_with_edge_distance() -> None:
     s, w = suite(box(300, 300), (50, 50, 0.0), goal=(150, 50))
     r = read(s, w)
     assert r.goal.tolist() == [pytest.approx(90.0), FAR, FAR]  # front only
-    s.set_goal((50, 150))  # straight left
+    s.set_goal((50 + 100 / math.sqrt(2), 50 + 100 / math.sqrt(2)))  # the left camera, +45
     r = read(s, w)
     assert r.goal.tolist() == [FAR, pytest.approx(90.0), FAR]
+    s.set_goal((50, 150))  # straight left: outside every camera's arc
+    assert read(s, w).goal.tolist() == [FAR, FAR, FAR]
 
 
 def test_camera_arc_edges() -> None:
