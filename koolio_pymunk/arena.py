@@ -451,8 +451,14 @@ def _parse_name(data: dict, source: str) -> str:
     return str(name).strip()
 
 
-def parse_arena(data: object, source: str, robot_radius: float = 10.0) -> Arena:
-    """Build a validated :class:`Arena` from a parsed YAML object (a mapping)."""
+def parse_arena(
+    data: object, source: str, robot_radius: float = 10.0, validate: bool = True
+) -> Arena:
+    """Build a validated :class:`Arena` from a parsed YAML object (a mapping).
+
+    Keys and types are always checked; ``validate=False`` skips the geometry checks of
+    :func:`validate_arena` (the editor opens an invalid arena to show and fix it).
+    """
     if data is None:
         _fail(source, "", "empty file (expected a mapping with name, walls, goals, ...)")
     data = _mapping(data, source, "", "expected keys name, walls, goals, end_of_world, start")
@@ -469,7 +475,8 @@ def parse_arena(data: object, source: str, robot_radius: float = 10.0) -> Arena:
         rotate_deg=_parse_rotate(data, source),
         source=source,
     )
-    validate_arena(arena, robot_radius)
+    if validate:
+        validate_arena(arena, robot_radius)
     return arena
 
 

@@ -41,32 +41,19 @@ from dataclasses import dataclass, replace
 from pathlib import Path as FilePath
 
 from ..arena import (
-    REQUIRED_TOP_KEYS,
-    TOP_KEYS,
     Arena,
     Goal,
     Marker,
     Point,
     Start,
-    _check_keys,
-    _mapping,
-    _parse_active,
-    _parse_door,
-    _parse_entries,
-    _parse_goal,
-    _parse_marker,
-    _parse_name,
-    _parse_obstacles,
-    _parse_rotate,
-    _parse_start,
-    _points,
     arena_to_yaml,
-    atomic_write_text,
     load_arena,
+    parse_arena,
     parse_yaml_text,
     validate_arena,
 )
 from ..errors import ArenaError, KoolioError
+from ..files import atomic_write_text
 from ..hallway import build_hallway, load_door_table
 from . import items
 from .items import EditError, Path
@@ -127,27 +114,9 @@ def read_header(text: str) -> str:
 
 
 def parse_unchecked(data: object, source: str) -> Arena:
-    """Like :func:`~koolio_pymunk.arena.parse_arena` but without the geometry checks.
-
-    Types and keys are checked (a malformed file cannot be opened); an arena whose
-    geometry is invalid is returned so that the editor can show and fix the problem.
-    """
-    if data is None:
-        raise ArenaError(f"{source}: empty file (expected a mapping with name, walls, goals, ...)")
-    data = _mapping(data, source, "", "expected keys name, walls, goals, end_of_world, start")
-    _check_keys(data, TOP_KEYS, REQUIRED_TOP_KEYS, source, "")
-    return Arena(
-        name=_parse_name(data, source),
-        walls=_points(data["walls"], source, "walls"),
-        goals=_parse_entries(data, "goals", source, _parse_goal),
-        end_of_world=_parse_entries(data, "end_of_world", source, _parse_marker),
-        start=_parse_start(data["start"], source),
-        active_goal=_parse_active(data, source),
-        obstacles=_parse_obstacles(data, source),
-        doors=_parse_entries(data, "doors", source, _parse_door),
-        rotate_deg=_parse_rotate(data, source),
-        source=source,
-    )
+    """The core parser without the geometry checks: keys and types are checked (a
+    malformed file cannot be opened); an invalid geometry is returned to be fixed."""
+    return parse_arena(data, source, validate=False)
 
 
 def read_arena_file(path: str | FilePath) -> tuple[Arena, str]:
