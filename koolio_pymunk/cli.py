@@ -97,12 +97,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--qtable", default=None, help="also describe this Q-table file")
 
     for name, module in EXTRA_COMMANDS.items():
-        try:  # TODO(session): remove once every module exists
-            mod = importlib.import_module(module)
-        except ModuleNotFoundError as exc:
-            if exc.name != module:
-                raise
-            continue
+        mod = importlib.import_module(module)
         p = sub.add_parser(name, help=(mod.__doc__ or name).strip().splitlines()[0])
         mod.add_arguments(p)
     return parser
