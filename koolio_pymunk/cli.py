@@ -44,7 +44,10 @@ def _add_env_args(p: argparse.ArgumentParser) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="koolio-pm", description=__doc__.splitlines()[0])
+    parser = _Parser(
+        prog="koolio-pm",
+        description="Koolio, the FCRAR 2008 delivery robot, learning by Q-learning on pymunk.",
+    )
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     p = sub.add_parser("train", help="headless episodic Q-learning")
