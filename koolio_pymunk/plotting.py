@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import KoolioError, located
-from .qtable import atomic_write
+from .files import atomic_write
 
 REQUIRED = ("episode", "reward", "steps", "outcome")
 OUTCOMES = (

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -818,11 +817,15 @@ class ViewerApp:
 
     def save_screenshot(self, path: str | Path) -> Path:
         """Write the window as a PNG, atomically (temporary file, then rename)."""
+        import io
+
+        from ..files import atomic_write
+
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp.png")
-        self.pg.image.save(self.screen, str(tmp))
-        os.replace(tmp, path)
+        buf = io.BytesIO()
+        self.pg.image.save(self.screen, buf, "png")
+        atomic_write(path, buf.getvalue())
         return path
 
 
