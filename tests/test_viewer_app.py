@@ -143,6 +143,16 @@ def test_toggles_by_key_and_by_check_box(tmp_path, config, name, k) -> None:
         assert app.env.config.rescue.auto_rescue_toggle is start
 
 
+def test_clock_speed_slider_arrow(tmp_path, config) -> None:
+    from koolio_pymunk.viewer.app import slider_to_speed, speed_to_slider
+
+    app = make_app(tmp_path, config, running=False, speed=10.0)
+    click(app.slider.right_button)
+    app.frame()
+    assert app.speed == slider_to_speed(speed_to_slider(10.0) + 5)
+    assert app.speed > 10.0 and f"{app.speed:g} steps/s" in app.speed_label.text
+
+
 def test_speed_keys_and_help_overlay(tmp_path, config) -> None:
     app = make_app(tmp_path, config, running=False, speed=10.0)
     key(pygame.K_RIGHTBRACKET)
@@ -379,6 +389,7 @@ def test_greedy_view_leaves_the_table_alone(tmp_path, config) -> None:
         ["--screenshot", "out.jpg", "--steps", "1"],
         ["--steps", "-1"],
         ["--speed", "0"],
+        ["--paused", "--steps", "5"],
         [],  # headless needs --steps or --episodes
     ],
 )

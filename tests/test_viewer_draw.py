@@ -148,3 +148,13 @@ def test_rgb_array_of_the_hallway_has_overview_and_follow_views() -> None:
     for cam in renderer.cameras:
         assert pixel(img, body_pixel(env, cam)) == draw.ROBOT_NORMAL
     env.close()
+
+
+def test_human_render_mode_draws_in_a_window() -> None:
+    env = KoolioEnv("room", render_mode="human")
+    env.reset(seed=0)
+    assert env.render() is None
+    shown = pygame.display.get_surface()
+    assert shown is not None and shown.get_size() == env._renderer.size
+    env.close()
+    assert env._renderer is None

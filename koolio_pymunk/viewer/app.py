@@ -177,8 +177,13 @@ def run(args: argparse.Namespace) -> int:
     from ..env import KoolioEnv
     from .session import Session
 
-    if args.steps is None and args.episodes is None and _headless():
-        raise KoolioError("view: headless (SDL_VIDEODRIVER=dummy) needs --steps N or --episodes N")
+    if _headless():
+        if args.steps is None and args.episodes is None:
+            raise KoolioError(
+                "view: headless (SDL_VIDEODRIVER=dummy) needs --steps N or --episodes N"
+            )
+        if args.paused:
+            raise KoolioError("--paused: a headless window cannot be resumed")
     env = KoolioEnv(arena=args.arena, config=args.config, goal=args.goal)
     session = Session(
         env,
