@@ -74,7 +74,8 @@ class PoseReader:
     """Every robot's position in one pymunk batch call (``pymunk.batch``).
 
     Chipmunk lists bodies in its own order (sleeping robots move to the end), so each
-    call reads the body ids too and puts the rows back in robot order.
+    call reads the body ids too and puts the rows back in robot order; each robot's
+    arena-copy offset is then removed.
     """
 
     def __init__(self, world: World) -> None:
@@ -83,11 +84,12 @@ class PoseReader:
         ids = np.array([b.id for b in world.bodies], dtype=np.intp)
         self.order = np.argsort(ids)
         self.sorted_ids = ids[self.order]
+        self.offsets = np.asarray(world.offsets, dtype=np.float64)
         self.buffer = pymunk.batch.Buffer()
         self.fields = pymunk.batch.BodyFields.BODY_ID | pymunk.batch.BodyFields.POSITION
 
     def xy(self) -> np.ndarray:
-        """``(N, 2)`` positions in robot order."""
+        """``(N, 2)`` positions in robot order, arena coordinates (as ``World.pose``)."""
         self.buffer.clear()
         pymunk.batch.get_space_bodies(self.world.space, self.fields, self.buffer)
         ids = np.frombuffer(self.buffer.int_buf(), dtype=np.intp)
@@ -96,6 +98,7 @@ class PoseReader:
         robot = self.sorted_ids[at] == ids  # drops the static body
         out = np.empty((self.n, 2))
         out[self.order[at[robot]]] = pos[robot]
+        out[:, 0] -= self.offsets
         return out
 
 

@@ -139,16 +139,16 @@ def _first_alpha(
     walls ``active[:n]``; 1.0 when none is hit. Chipmunk's radius-0 segment query."""
     best = 1.0
     for j in range(n):
-        w = walls[active[j]]
-        ax = w[0]
-        ay = w[1]
-        nx = w[4]
-        ny = w[5]
+        k = active[j]
+        ax = walls[k, 0]
+        ay = walls[k, 1]
+        nx = walls[k, 4]
+        ny = walls[k, 5]
         d = (ax - x) * nx + (ay - y) * ny
         sax = ax - x
         say = ay - y
-        sbx = w[2] - x
-        sby = w[3] - y
+        sbx = walls[k, 2] - x
+        sby = walls[k, 3] - y
         if (dx * say - dy * sax) * (dx * sby - dy * sbx) <= 0.0:
             ad = -d
             bd = (dx * nx + dy * ny) - d
@@ -175,10 +175,10 @@ def _walls_in_box(
     lying inside the box cannot hit the others."""
     n = 0
     for j in range(n_candidates):
-        w = walls[candidates[j]]
-        if w[6] - _CULL_MARGIN > x1 or w[8] + _CULL_MARGIN < x0:
+        k = candidates[j]
+        if walls[k, 6] - _CULL_MARGIN > x1 or walls[k, 8] + _CULL_MARGIN < x0:
             continue
-        if w[7] - _CULL_MARGIN > y1 or w[9] + _CULL_MARGIN < y0:
+        if walls[k, 7] - _CULL_MARGIN > y1 or walls[k, 9] + _CULL_MARGIN < y0:
             continue
         active[n] = candidates[j]
         n += 1

@@ -16,7 +16,13 @@ it out. The velocity is then zeroed: a move is an action, not momentum. Rotation
 the heading directly (a circle's contacts do not depend on it).
 
 Several robots may share the world (``n_robots``): each is its own circle in the same
-space but in one non-colliding shape group, so each lives in its own copy of the arena.
+space, in one non-colliding shape group, and each lives in its own copy of the arena:
+robot ``k``'s walls are the arena's shifted by ``k * spacing`` along x (a power of two
+wider than the arena), so robots are never even near each other in pymunk's broad phase
+(crowds of robots around the start point would otherwise cost every sub-step a pair test
+per neighbour). :meth:`pose`, :meth:`place`, :attr:`x` and :meth:`wall_clearance` speak
+the arena's own coordinates; robot 0's copy is the arena itself (``walls``). While some
+robots move, the others sleep (see :meth:`_wake_only`).
 
 Example::
 
@@ -31,8 +37,9 @@ Example::
 
 from __future__ import annotations
 
+import functools
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from enum import IntEnum
 
 import pymunk
@@ -82,6 +89,29 @@ _REVERSE = int(Action.REVERSE)
 ACTION_NAMES = ("Stop", "RotateLeft", "RotateRight", "Forward", "Reverse")
 
 
+def chipmunk_step(space: pymunk.Space) -> Callable[[float], None]:
+    """``space.step`` without pymunk's Python bookkeeping around Chipmunk's step.
+
+    ``Space.step`` wraps ``cpSpaceStep`` with work for shapes added or removed during a
+    step, post-step callbacks and a mass check of newly added bodies; a :class:`World`
+    never uses any of these while it moves, so calling ``cpSpaceStep`` itself is the same
+    step (the same C call on the same space) for about a third of the Python cost. Falls
+    back to ``space.step`` if pymunk's internals are not where pymunk 7 keeps them.
+    """
+    try:
+        from pymunk._chipmunk import lib
+
+        return functools.partial(lib.cpSpaceStep, space._space)
+    except (ImportError, AttributeError):  # pragma: no cover - other pymunk layouts
+        return space.step
+
+
+def copy_spacing(segments: Sequence[tuple[Point, Point]], radius: float) -> float:
+    """A power of two wider than the arena plus two robot diameters and a margin."""
+    xs = [p[0] for seg in segments for p in seg]
+    return float(2 ** math.ceil(math.log2(max(xs) - min(xs) + 4.0 * radius + 64.0)))
+
+
 class World:
     """Walls as static segments and ``n_robots`` circle bodies in one pymunk space."""
 
@@ -91,17 +121,17 @@ class World:
         self.radius = float(radius)
         self.segments = [(tuple(map(float, a)), tuple(map(float, b))) for a, b in segments]
         self.space = pymunk.Space()
+        self._step = chipmunk_step(self.space)
         self.space.collision_bias = 0.0
         self.space.collision_slop = COLLISION_SLOP
         self.space.iterations = 20
-        self.walls: list[pymunk.Segment] = []
-        for a, b in self.segments:
-            seg = pymunk.Segment(self.space.static_body, a, b, 0.0)
-            seg.friction = 0.0
-            seg.elasticity = 0.0
-            seg.filter = pymunk.ShapeFilter(categories=WALL_CATEGORY)
-            self.walls.append(seg)
-        self.space.add(*self.walls)
+        self.spacing = copy_spacing(self.segments, self.radius) if n_robots > 1 else 0.0
+        """x distance between the arena copies of successive robots (0: one robot)."""
+        self.offsets = [k * self.spacing for k in range(n_robots)]
+        self.walls = self._add_walls(0.0)
+        """Wall shapes of robot 0's copy: the arena's own coordinates."""
+        for off in self.offsets[1:]:
+            self._add_walls(off)
         self.bodies: list[pymunk.Body] = []
         self.shapes: list[pymunk.Circle] = []
         for _ in range(n_robots):
@@ -123,6 +153,18 @@ class World:
     ) -> World:
         return cls(segments, radius, n_robots)
 
+    def _add_walls(self, dx: float) -> list[pymunk.Segment]:
+        """Add one copy of the walls, shifted by ``dx`` along x."""
+        walls = []
+        for (ax, ay), (bx, by) in self.segments:
+            seg = pymunk.Segment(self.space.static_body, (ax + dx, ay), (bx + dx, by), 0.0)
+            seg.friction = 0.0
+            seg.elasticity = 0.0
+            seg.filter = pymunk.ShapeFilter(categories=WALL_CATEGORY)
+            walls.append(seg)
+        self.space.add(*walls)
+        return walls
+
     def _add_robot(self) -> None:
         body = pymunk.Body(1.0, math.inf)
         shape = pymunk.Circle(body, self.radius)
@@ -140,21 +182,24 @@ class World:
 
     @property
     def x(self) -> list[float]:
-        return [b.position.x for b in self.bodies]
+        return [b.position.x - off for b, off in zip(self.bodies, self.offsets)]
 
     @property
     def y(self) -> list[float]:
         return [b.position.y for b in self.bodies]
 
     def pose(self, i: int = 0) -> tuple[float, float, float]:
-        """``(RobotLocation x, y, RobotOrientation)`` of robot ``i``; heading in [0, 2pi)."""
+        """``(RobotLocation x, y, RobotOrientation)`` of robot ``i`` in the arena's
+        coordinates (its own copy's offset removed); heading in [0, 2pi)."""
         p = self.bodies[i].position
-        return (p.x, p.y, self.heading[i])
+        if i == 0:
+            return (p.x, p.y, self.heading[0])
+        return (p.x - self.offsets[i], p.y, self.heading[i])
 
     def place(self, i: int, at: Point, heading: float) -> None:
-        """Put robot ``i`` at ``at`` with ``heading`` (radians), at rest."""
+        """Put robot ``i`` at ``at`` (arena coordinates) with ``heading`` (radians), at rest."""
         body = self.bodies[i]
-        body.position = (float(at[0]), float(at[1]))
+        body.position = (float(at[0]) + self.offsets[i], float(at[1]))
         body.velocity = (0.0, 0.0)
         self.heading[i] = heading % TWO_PI
         self.space.reindex_shapes_for_body(body)
@@ -234,7 +279,7 @@ class World:
                 break
         n = max(1, math.ceil(distance / travel))
         dt = 1.0 / n
-        step = self.space.step
+        step = self._step
         for _ in range(n):
             step(dt)
         self._stop()
@@ -254,7 +299,7 @@ class World:
     # -- geometry queries (for tests and the viewer) ----------------------------------
     def wall_clearance(self, i: int = 0) -> float:
         """Distance from robot ``i``'s edge to the nearest wall (negative = overlap)."""
-        p = self.bodies[i].position
+        p = self.bodies[i].position - (self.offsets[i], 0.0)
         best = math.inf
         for seg in self.walls:
             info = seg.point_query(p)

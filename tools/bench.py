@@ -1,0 +1,338 @@
+"""koolio-pymunk's speed benchmark: steps/s, time to competence, memory, where time goes.
+
+Sections (each printed as a table row, all written to ``--out`` as JSON):
+
+* **reference / fast**: the single-robot training loop (epsilon-greedy, Q update, same
+  code as ``koolio-pm train``) on the hallway with the pymunk reference sensors and with
+  the fast backend, without file I/O: steps per second, and the fast/reference ratio;
+* **train (end to end)**: :func:`training.train` as ``koolio-pm train`` runs it, saving
+  the table (file + backup, fsynced) and the log at every episode end;
+* **N robots**: :func:`multi.train_many` with ``--robots`` robots, robot-steps per second;
+* **time to competence**, per seed: default ``koolio-pm train`` (hallway, default
+  config), a greedy evaluation of 100 episodes after every ``--check-every`` episodes,
+  until at least 90 % reach the goal; each seed runs in its own process, which also
+  reports its peak RSS and its Q-table's size next to the paper's dense 113.9 MiB;
+* **profile**: cProfile of the fast single-robot loop, top 10 functions by own time;
+* **agreement**: fast vs reference sensing on a sample of random poses per arena
+  (``tools/agreement.py`` runs the full 100k).
+
+Every rate is given twice: per wall-clock second and per CPU second of this process
+(``time.process_time``). On an idle machine they agree; on a shared one other processes
+stretch wall time, and the CPU figure is the one to compare between runs.
+
+    .venv/bin/python tools/bench.py --out bench.json         # a few minutes
+    .venv/bin/python tools/bench.py --quick                   # about a minute
+"""
+
+from __future__ import annotations
+
+import argparse
+import cProfile
+import json
+import os
+import platform
+import pstats
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+PAPER_DENSE_MIB = 113.9
+
+
+class Timer:
+    """Wall and CPU seconds of a block."""
+
+    def __enter__(self) -> Timer:
+        self.w0, self.c0 = time.perf_counter(), time.process_time()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.wall = time.perf_counter() - self.w0
+        self.cpu = time.process_time() - self.c0
+
+
+def rates(steps: int, t: Timer) -> dict:
+    return {
+        "steps": steps,
+        "wall_s": round(t.wall, 3),
+        "cpu_s": round(t.cpu, 3),
+        "per_wall_s": round(steps / max(t.wall, 1e-9)),
+        "per_cpu_s": round(steps / max(t.cpu, 1e-9)),
+    }
+
+
+def make_env(backend: str, arena: str = "hallway"):
+    from koolio_pymunk.config import load_config
+    from koolio_pymunk.env import KoolioEnv
+
+    return KoolioEnv(arena, config=load_config(overrides={"sensors": {"backend": backend}}))
+
+
+def learning_loop(backend: str, min_steps: int, seed: int = 0) -> dict:
+    """The training loop of ``train`` without file I/O, for at least ``min_steps`` steps."""
+    import numpy as np
+
+    from koolio_pymunk.learner import QLearner
+    from koolio_pymunk.qtable import QTable
+    from koolio_pymunk.training import episode_seeds, run_episode
+
+    env = make_env(backend)
+    table = QTable(env.layout, {}, env.config.learner.q_init)
+    agent = QLearner(table, env.config.learner, np.random.default_rng(seed))
+    env.reset(seed=0)
+    env.transition(0)  # compile / warm up
+    steps, e = 0, 0
+    with Timer() as t:
+        while steps < min_steps:
+            env_seed, agent.rng = episode_seeds(seed, e)
+            agent.set_episode(e)
+            env.reset(seed=env_seed)
+            steps += run_episode(env, agent, learn=True)[1]
+            e += 1
+    out = rates(steps, t)
+    out["episodes"] = e
+    return out
+
+
+def end_to_end(episodes: int, folder: Path) -> dict:
+    from koolio_pymunk.qtable import QTableStore
+    from koolio_pymunk.training import train
+
+    env = make_env("fast")
+    with Timer() as t:
+        res = train(
+            env, QTableStore(folder / "e2e.qtable"), episodes, 0, folder / "e2e.csv", report=None
+        )
+    out = rates(res.steps, t)
+    out["episodes"] = episodes
+    return out
+
+
+def many(robots: int, episodes: int, folder: Path) -> dict:
+    from koolio_pymunk.multi import train_many
+    from koolio_pymunk.qtable import QTableStore
+
+    env = make_env("fast")
+    warm = QTableStore(folder / "warm.qtable")
+    train_many(env, warm, 2, 0, None, robots=2, report=None)  # compile the batch kernels
+    with Timer() as t:
+        res = train_many(
+            env,
+            QTableStore(folder / "many.qtable"),
+            episodes,
+            0,
+            folder / "many.csv",
+            robots=robots,
+            report=None,
+        )
+    out = rates(res.steps, t)
+    out.update(robots=robots, episodes=episodes, states=len(res.table))
+    return out
+
+
+def profile(min_steps: int) -> list[dict]:
+    """Top 10 functions by own time in the fast single-robot loop."""
+    pr = cProfile.Profile()
+    pr.enable()
+    learning_loop("fast", min_steps, seed=1)
+    pr.disable()
+    st = pstats.Stats(pr)
+    total = sum(v[2] for v in st.stats.values())
+    rows = sorted(st.stats.items(), key=lambda kv: kv[1][2], reverse=True)[:10]
+    out = []
+    for (file, line, name), (_cc, nc, tt, ct, _callers) in rows:
+        where = f"{Path(file).name}:{line}({name})" if line else name
+        out.append(
+            {
+                "function": where,
+                "calls": nc,
+                "tottime_s": round(tt, 3),
+                "share": round(tt / total, 3),
+                "cumtime_s": round(ct, 3),
+            }
+        )
+    return out
+
+
+def competence(
+    seed: int, check_every: int, max_episodes: int, eval_episodes: int, folder: Path
+) -> dict:
+    """Default training until 90 % of greedy evaluation episodes reach the goal."""
+    from koolio_pymunk.env import KoolioEnv
+    from koolio_pymunk.qtable import QTableStore, human_bytes
+    from koolio_pymunk.training import evaluate, train
+
+    env = KoolioEnv("hallway")
+    store = QTableStore(folder / f"seed{seed}.qtable")
+    train_s = eval_s = 0.0
+    episodes, steps, rate, reached = 0, 0, 0.0, False
+    history = []
+    while episodes < max_episodes:
+        with Timer() as t:
+            res = train(env, store, check_every, seed, folder / f"seed{seed}.csv", report=None)
+        train_s += t.wall
+        episodes += check_every
+        steps += res.steps
+        with Timer() as t:
+            ev = evaluate(env, res.table, eval_episodes, seed)
+        eval_s += t.wall
+        rate = ev.goal_rate
+        history.append([episodes, round(train_s, 2), rate])
+        if rate >= 0.9:
+            reached = True
+            break
+    table = res.table
+    return {
+        "seed": seed,
+        "reached": reached,
+        "episodes": episodes,
+        "steps": steps,
+        "train_wall_s": round(train_s, 2),
+        "eval_wall_s": round(eval_s, 2),
+        "goal_rate": rate,
+        "history": history,
+        "peak_rss_mib": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1),
+        "qtable_states": len(table),
+        "qtable_entries": table.entries,
+        "qtable_file_bytes": table.nbytes(),
+        "qtable_file": human_bytes(table.nbytes()),
+        "dense_entries": table.layout.n_entries,
+        "dense": human_bytes(table.layout.dense_bytes()),
+    }
+
+
+def competence_subprocess(seed: int, args: argparse.Namespace, folder: Path) -> dict:
+    cmd = [
+        sys.executable,
+        __file__,
+        "--competence-seed",
+        str(seed),
+        "--check-every",
+        str(args.check_every),
+        "--max-episodes",
+        str(args.max_episodes),
+        "--eval-episodes",
+        str(args.eval_episodes),
+        "--folder",
+        str(folder),
+    ]
+    done = subprocess.run(cmd, capture_output=True, text=True, check=True, cwd=ROOT)
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def agreement_sample(poses: int) -> list[dict]:
+    from koolio_pymunk.agreement import compare_backends
+
+    return [compare_backends(a, poses, seed=9).as_dict() for a in ("hallway", "room", "obstacles")]
+
+
+def machine() -> dict:
+    return {
+        "cpus": os.cpu_count(),
+        "python": platform.python_version(),
+        "platform": platform.platform(),
+        "load_average": [round(x, 2) for x in os.getloadavg()],
+    }
+
+
+def table_line(name: str, r: dict, extra: str = "") -> str:
+    return (
+        f"  {name:<34} {r['per_wall_s']:>10,} {r['per_cpu_s']:>10,}   "
+        f"{r['steps']:>8,} steps {r['wall_s']:>7.1f} s  {extra}"
+    )
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--quick", action="store_true", help="short budgets (about a minute)")
+    p.add_argument("--out", default=None, help="write the figures as JSON here")
+    p.add_argument("--robots", type=int, default=64, help="robots for the N-robot row (64)")
+    p.add_argument("--seeds", type=int, nargs="*", default=None, help="competence seeds")
+    p.add_argument("--check-every", type=int, default=100)
+    p.add_argument("--max-episodes", type=int, default=3000)
+    p.add_argument("--eval-episodes", type=int, default=100)
+    p.add_argument("--competence-seed", type=int, default=None, help=argparse.SUPPRESS)
+    p.add_argument("--folder", default=None, help=argparse.SUPPRESS)
+    args = p.parse_args(argv)
+
+    if args.competence_seed is not None:  # child process of the competence section
+        out = competence(
+            args.competence_seed,
+            args.check_every,
+            args.max_episodes,
+            args.eval_episodes,
+            Path(args.folder),
+        )
+        print(json.dumps(out))
+        return 0
+
+    q = args.quick
+    seeds = args.seeds if args.seeds is not None else ([0] if q else [0, 1, 2])
+    report: dict = {"machine": machine(), "quick": q}
+    print(
+        f"koolio-pymunk bench ({'quick' if q else 'full'}), {report['machine']['cpus']} CPUs, "
+        f"load average {report['machine']['load_average']}"
+    )
+    print(f"  {'':<34} {'per wall s':>10} {'per CPU s':>10}")
+    with tempfile.TemporaryDirectory(dir=ROOT) as tmp:
+        folder = Path(tmp)
+        ref = learning_loop("pymunk", 4_000 if q else 15_000)
+        print(table_line("reference (pymunk queries) steps/s", ref))
+        fast = learning_loop("fast", 30_000 if q else 150_000)
+        ratio = fast["per_cpu_s"] / max(1, ref["per_cpu_s"])
+        fast["ratio_to_reference_cpu"] = round(ratio, 1)
+        print(table_line("fast backend steps/s", fast, f"x{ratio:.1f} reference"))
+        e2e = end_to_end(50 if q else 200, folder)
+        print(table_line("train end to end (saves) steps/s", e2e))
+        multi = many(args.robots, 100 if q else 600, folder)
+        print(table_line(f"{args.robots} robots robot-steps/s", multi))
+        report.update(reference=ref, fast=fast, end_to_end=e2e, many=multi)
+
+        comp = []
+        for s in seeds:
+            c = competence_subprocess(s, args, folder)
+            comp.append(c)
+            got = (
+                f"{c['train_wall_s']:.1f} s of training, {c['episodes']} episodes"
+                if c["reached"]
+                else f"not reached in {c['episodes']} episodes "
+                f"({c['train_wall_s']:.1f} s, last goal rate {c['goal_rate']:.0%})"
+            )
+            print(
+                f"  time to competence, seed {s}: {got}; peak RSS {c['peak_rss_mib']} MiB; "
+                f"Q-table {c['qtable_entries']:,} entries, {c['qtable_file']} "
+                f"(dense: {c['dense_entries']:,} entries, {c['dense']})"
+            )
+        report["competence"] = comp
+
+        prof = profile(20_000 if q else 60_000)
+        report["profile"] = prof
+        print("  where the time goes (fast single-robot loop, cProfile own time):")
+        for r in prof:
+            print(f"    {r['share']:>6.1%} {r['calls']:>9,}  {r['function']}")
+
+        agree = agreement_sample(300 if q else 2_000)
+        report["agreement_sample"] = agree
+        print(
+            "  agreement sample (tools/agreement.py runs 100k per arena): "
+            + ", ".join(
+                f"{a['arena']} {a['poses']} poses: {a['distance_mismatches']} distance / "
+                f"{a['state_mismatches']} state mismatches"
+                for a in agree
+            )
+        )
+    report["peak_rss_bench_mib"] = round(
+        resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1
+    )
+    if args.out:
+        Path(args.out).write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
+        print(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
