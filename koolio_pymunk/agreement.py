@@ -11,8 +11,10 @@ uniform heading) and reads the sensors with both backends:
   fast backend's fused ``sense`` (compiled read-out), both with the same noise draws
   (noise off unless ``noise`` is given, e.g. ``"uniform"``).
 
-``tests/test_raycast.py`` runs it on a small sample per shipped arena; ``tools/bench.py``
-on 100k poses per arena.
+``tests/test_raycast.py`` runs it on a small sample per shipped arena;
+``tools/agreement.py`` on 100k poses per arena. :func:`cone_disagreement` measures how
+often the exact-cone sonar model (``sensors.backend: cone``) encodes differently from the
+paper's sub-arcs.
 """
 
 from __future__ import annotations
@@ -94,3 +96,48 @@ def compare_backends(
         got = fast.sense((x, y, h), np.random.default_rng([seed, i]))
         state_bad += want != got or codes != fast.last()[1]
     return Agreement(arena_name, n, dist_bad, state_bad, identical, worst)
+
+
+@dataclass
+class ConeDisagreement:
+    arena: str
+    poses: int
+    state_differs: float
+    """Share of poses whose encoded state differs between the cone and sub-arc models."""
+    group_differs: list[float]
+    """Per sonar group (keyword order): share of poses whose code differs."""
+    cone_not_nearer: int
+    """Poses where a cone reading exceeds the sub-arc reading (must be 0: the cone sees
+    every direction a sub-arc ray sees)."""
+
+    def as_dict(self) -> dict:
+        return dict(self.__dict__)
+
+
+def cone_disagreement(arena_name: str, n: int, seed: int = 0) -> ConeDisagreement:
+    """How often the exact-cone sonar model encodes differently from the paper's sub-arcs
+    (noise off, the fast kernel for both, ``n`` random free poses)."""
+    cfg = Config()
+    cfg.sensors.noise.model = "none"
+    radius = cfg.robot.radius
+    arena = load_arena(arena_name, radius).to_world()
+    world = World(arena.segments(), radius)
+    markers = [m.at for m in arena.end_of_world]
+    sub = SensorSuite(cfg.sensors, world, arena.goal().at, markers, backend="fast")
+    cone = SensorSuite(cfg.sensors, world, arena.goal().at, markers, backend="cone")
+    n_groups = len(cfg.sensors.sonar.groups)
+    states = 0
+    groups = np.zeros(n_groups)
+    not_nearer = 0
+    for x, y, h in free_poses(arena_name, radius, n, seed):
+        raw_s = sub.raw(x, y, h)[0][: sub.n_sonar]
+        raw_c = cone.raw(x, y, h)[0][: cone.n_sonar]
+        not_nearer += bool((raw_c > raw_s + 1e-9).any())
+        sub.sense((x, y, h), np.random.default_rng(0))
+        cone.sense((x, y, h), np.random.default_rng(0))
+        a, b = sub.last()[1], cone.last()[1]
+        states += a != b
+        groups += np.array(a[-n_groups:]) != np.array(b[-n_groups:])
+    return ConeDisagreement(
+        arena_name, n, states / n, [round(float(g), 4) for g in groups / n], not_nearer
+    )

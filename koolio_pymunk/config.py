@@ -130,8 +130,10 @@ class SensorConfig:
     """``ReallyLongDistance``: the reading of a sensor that sees nothing, inches."""
     backend: str = "fast"
     """Ray engine: ``fast`` (a compiled kernel; the same readings, bit for bit on the
-    shipped arenas) or ``pymunk`` (pymunk segment queries, the reference). See
-    ``docs/speed.md``."""
+    shipped arenas) or ``pymunk`` (pymunk segment queries, the reference). ``cone`` is the
+    fast kernel with an exact-cone sonar instead of the paper's sub-arcs (each sonar reads
+    the nearest wall point anywhere in its arc; not the paper's model, and its Q-tables
+    are kept apart). See ``docs/speed.md``."""
 
 
 @dataclass
@@ -354,10 +356,10 @@ def _validate(cfg: Config, src: str) -> None:
     )
     _check(s.noise.scale >= 0, src, "sensors.noise.scale", "must be >= 0")
     _check(
-        s.backend in ("pymunk", "fast"),
+        s.backend in ("pymunk", "fast", "cone"),
         src,
         "sensors.backend",
-        f"unknown backend {s.backend!r} (valid: pymunk, fast)",
+        f"unknown backend {s.backend!r} (valid: fast, pymunk, cone)",
     )
     so = s.sonar
     _check(len(so.sonar_sensors_deg) >= 1, src, "sensors.sonar.sonar_sensors_deg", "empty")

@@ -258,6 +258,53 @@ def _camera(
 
 
 @numba.njit(cache=True)
+def _clip(t0: float, t1: float, c0: float, c1: float) -> tuple[float, float]:
+    """Narrow ``[t0, t1]`` to the ``t`` where ``c0 + t * c1 <= 0`` (empty: t0 > t1)."""
+    if c1 > 0.0:
+        t1 = min(t1, -c0 / c1)
+    elif c1 < 0.0:
+        t0 = max(t0, -c0 / c1)
+    elif c0 > 0.0:
+        t0 = 2.0
+    return t0, t1
+
+
+@numba.njit(cache=True)
+def cone_nearest(
+    x: float, y: float, theta: float, half: float, walls: np.ndarray, active: np.ndarray, n: int
+) -> float:
+    """Distance from ``(x, y)`` to the nearest wall point inside the cone of directions
+    ``theta +- half`` (``half`` < 90 degrees); infinity when no wall enters the cone.
+
+    Each wall is clipped to the cone (two half-planes through the apex) and the point of
+    the clipped piece nearest to the apex is taken. That point is never hidden by another
+    wall: a wall in front of it would itself have a nearer point in the cone. So this is
+    the exact reading of a sonar whose every direction in the cone is a ray.
+    """
+    lx, ly = math.cos(theta + half), math.sin(theta + half)
+    rx, ry = math.cos(theta - half), math.sin(theta - half)
+    best = np.inf
+    for j in range(n):
+        k = active[j]
+        ax = walls[k, 0] - x
+        ay = walls[k, 1] - y
+        dx = walls[k, 2] - walls[k, 0]
+        dy = walls[k, 3] - walls[k, 1]
+        # inside: right of the left edge (cross(l, p) <= 0), left of the right edge
+        t0, t1 = _clip(0.0, 1.0, lx * ay - ly * ax, lx * dy - ly * dx)
+        t0, t1 = _clip(t0, t1, -(rx * ay - ry * ax), -(rx * dy - ry * dx))
+        if t0 > t1:
+            continue
+        dd = dx * dx + dy * dy
+        t = -(ax * dx + ay * dy) / dd if dd > 0.0 else 0.0
+        t = min(max(t, t0), t1)
+        px = ax + t * dx
+        py = ay + t * dy
+        best = min(best, math.sqrt(px * px + py * py))
+    return best
+
+
+@numba.njit(cache=True)
 def sense_one(
     x: float,
     y: float,
@@ -275,7 +322,9 @@ def sense_one(
 ) -> None:
     """One noise-free reading of every sensor of a robot at ``(x, y, h)``.
 
-    ``params`` = ``[ray_length, radius, really_long_distance, camera_half_arc]``.
+    ``params`` = ``[ray_length, radius, really_long_distance, camera_half_arc,
+    sonar_model, sonar_half_arc]``; ``sonar_model`` 0 is the paper's sub-arc rays, 1 the
+    exact cone (:func:`cone_nearest` around the mean of each sonar's ray offsets).
     Writes ``raw`` = sonar edge distances, goal per camera, end-of-world per camera,
     compass units (what ``SensorSuite`` noises next), ``rays`` = every sub-arc ray's
     centre distance and ``eow_k`` = the marker each camera sees (-1: none).
@@ -290,7 +339,7 @@ def sense_one(
     n_sonar, n_sub = ray_offsets.shape
     n_cam = camera_dirs.shape[0]
     n_rays = n_sonar * n_sub
-    if trig[0] != h:
+    if trig[0] != h and params[4] == 0.0:
         for s in range(n_sonar):
             for i in range(n_sub):
                 angle = h + ray_offsets[s, i]
@@ -299,6 +348,60 @@ def sense_one(
         trig[0] = h
     near = np.empty(walls.shape[0], np.int64)
     n_near = _near_walls(x, y, length, walls, near)
+    if params[4] == 1.0:
+        _sense_cones(x, y, h, ray_offsets, params, walls, near, n_near, raw, rays)
+    else:
+        _sense_sub_arcs(x, y, ray_offsets, params, walls, near, n_near, raw, rays, trig)
+    goal2 = goal.reshape(1, 2)
+    for c in range(n_cam):
+        direction = h + camera_dirs[c]
+        raw[n_sonar + c] = _camera(x, y, direction, goal2, half_arc, radius, far, walls)[0]
+        d, k = _camera(x, y, direction, markers, half_arc, radius, far, walls)
+        raw[n_sonar + n_cam + c] = d
+        eow_k[c] = k
+    raw[n_sonar + 2 * n_cam] = (h / TWO_PI) * 256.0
+
+
+@numba.njit(cache=True)
+def _sense_cones(
+    x: float,
+    y: float,
+    h: float,
+    ray_offsets: np.ndarray,
+    params: np.ndarray,
+    walls: np.ndarray,
+    near: np.ndarray,
+    n_near: int,
+    raw: np.ndarray,
+    rays: np.ndarray,
+) -> None:
+    """Cone model: every sonar reads its :func:`cone_nearest` (rays all get that value)."""
+    length, radius, far, half = params[0], params[1], params[2], params[5]
+    n_sonar, n_sub = ray_offsets.shape
+    for s in range(n_sonar):
+        theta = h + 0.5 * (ray_offsets[s, 0] + ray_offsets[s, n_sub - 1])
+        nearest = min(cone_nearest(x, y, theta, half, walls, near, n_near), length)
+        rays[s, :] = nearest
+        raw[s] = far if nearest > length - 1e-9 else nearest - radius
+
+
+@numba.njit(cache=True)
+def _sense_sub_arcs(
+    x: float,
+    y: float,
+    ray_offsets: np.ndarray,
+    params: np.ndarray,
+    walls: np.ndarray,
+    near: np.ndarray,
+    n_near: int,
+    raw: np.ndarray,
+    rays: np.ndarray,
+    trig: np.ndarray,
+) -> None:
+    """The paper's model: the nearest hit over each sonar's sub-arc rays."""
+    length, radius, far = params[0], params[1], params[2]
+    n_sonar, n_sub = ray_offsets.shape
+    n_rays = n_sonar * n_sub
     active = np.empty(walls.shape[0], np.int64)
     ends = np.empty((n_sub, 2))
     for s in range(n_sonar):
@@ -320,14 +423,6 @@ def sense_one(
             rays[s, i] = d
             nearest = min(nearest, d)
         raw[s] = far if nearest > length - 1e-9 else nearest - radius
-    goal2 = goal.reshape(1, 2)
-    for c in range(n_cam):
-        direction = h + camera_dirs[c]
-        raw[n_sonar + c] = _camera(x, y, direction, goal2, half_arc, radius, far, walls)[0]
-        d, k = _camera(x, y, direction, markers, half_arc, radius, far, walls)
-        raw[n_sonar + n_cam + c] = d
-        eow_k[c] = k
-    raw[n_sonar + 2 * n_cam] = (h / TWO_PI) * 256.0
 
 
 @numba.njit(cache=True)
@@ -413,7 +508,7 @@ class FastRays:
         return bool(line_of_sight(float(x), float(y), float(tx), float(ty), self.walls))
 
 
-ENGINES = {"pymunk": PymunkRays, "fast": FastRays}
+ENGINES = {"pymunk": PymunkRays, "fast": FastRays, "cone": FastRays}
 
 
 def make_engine(name: str, world: World) -> PymunkRays | FastRays:

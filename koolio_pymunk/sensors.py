@@ -49,6 +49,7 @@ import numpy as np
 
 from .arena import Point
 from .config import SensorConfig
+from .errors import ConfigError
 from .raycast import make_engine, new_trig, sense_one
 from .readout import readout
 from .world import World
@@ -131,6 +132,13 @@ class SensorSuite:
             ]
         )
         self.backend = backend or cfg.backend
+        self.fused = self.backend in ("fast", "cone")
+        """The compiled kernel reads the sensors (``fast``, ``cone``), not pymunk."""
+        if self.backend == "cone" and so.sonar_arc_deg >= 180.0:
+            raise ConfigError(
+                f"sensors.backend: the cone sonar model needs sonar_arc_deg < 180, "
+                f"got {so.sonar_arc_deg:g}"
+            )
         self.engine = make_engine(self.backend, world)
         self._kernel = KernelInputs(self)
         self._last: tuple[Readings, tuple[int, ...]] | None = None
@@ -167,7 +175,7 @@ class SensorSuite:
     def raw(self, x: float, y: float, h: float) -> tuple[np.ndarray, np.ndarray, list[int]]:
         """Noise-free readings ``[sonar..., goal cam..., end-of-world cam..., compass]``,
         every sub-arc ray's centre distance, and the marker each camera sees (-1: none)."""
-        if self.backend == "fast":
+        if self.fused:
             k = self._kernel
             raw = np.empty(k.n_raw)
             rays = np.empty(self.ray_offsets.shape)
@@ -195,7 +203,7 @@ class SensorSuite:
 
         :meth:`last` gives the :class:`Readings` and codes of this reading (built on demand).
         """
-        if self.backend != "fast":
+        if not self.fused:
             r = self.read(pose, rng)
             codes = self.encode(r)
             self._last = (r, codes)
@@ -289,7 +297,9 @@ class KernelInputs:
         self.suite = s
         self.n_raw = s.n_sonar + 2 * s.n_camera + 1
         self.ray_offsets = np.ascontiguousarray(s.ray_offsets, dtype=np.float64)
-        self.params = np.array([s.ray_length, s.radius, s.far, s.camera_half_arc])
+        cone = 1.0 if s.backend == "cone" else 0.0
+        half_sonar = math.radians(s.cfg.sonar.sonar_arc_deg) / 2.0
+        self.params = np.array([s.ray_length, s.radius, s.far, s.camera_half_arc, cone, half_sonar])
         self.camera_dirs = np.ascontiguousarray(s.camera_dirs, dtype=np.float64)
         self.goal = np.array(s.goal, dtype=np.float64)
         self.markers = np.array(s.markers, dtype=np.float64).reshape(-1, 2)

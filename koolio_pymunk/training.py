@@ -51,7 +51,8 @@ def sensor_signature(cfg: Config) -> dict[str, Any]:
     """What a Q-table depends on: the sensor layout (noise settings excluded)."""
     s = cfg.sensors
     so, ca = s.sonar, s.camera
-    return {
+    model = {"sonar_model": "cone"} if s.backend == "cone" else {}  # sub-arcs: no key
+    return model | {
         "sonar_sensors_deg": list(so.sonar_sensors_deg),
         "sonar_arc_deg": so.sonar_arc_deg,
         "sub_arcs": so.sub_arcs,

@@ -17,7 +17,7 @@ from koolio_pymunk.env import KoolioEnv
 from koolio_pymunk.qtable import QTableStore
 from koolio_pymunk.raycast import FastRays, PymunkRays, hypot
 from koolio_pymunk.sensors import SensorSuite
-from koolio_pymunk.training import train
+from koolio_pymunk.training import sensor_signature, train
 from koolio_pymunk.world import World
 
 ARENAS = ("hallway", "room", "obstacles")
@@ -115,3 +115,35 @@ def test_free_poses_fit_the_robot() -> None:
     for x, y, h in poses:
         world.place(0, (x, y), h)
         assert world.wall_clearance(0) >= -0.011
+
+
+def test_cone_model_is_the_limit_of_dense_rays() -> None:
+    """The exact cone reads the nearest wall point in the whole arc: never farther than
+    the sub-arc rays, and what 2001 rays spanning the arc edge to edge converge to."""
+    cfg = SensorConfig()
+    cfg.noise.model = "none"
+    arena = load_arena("obstacles").to_world()
+    world = World(arena.segments(), 10.0)
+    cone = SensorSuite(cfg, world, arena.goal().at, [], backend="cone")
+    sub = SensorSuite(cfg, world, arena.goal().at, [], backend="fast")
+    rays = FastRays(world)
+    half = math.radians(cfg.sonar.sonar_arc_deg) / 2.0
+    fan = np.linspace(-half, half, 2001)
+    for x, y, h in free_poses("obstacles", 10.0, 40, seed=2):
+        c = cone.raw(x, y, h)[0][: cone.n_sonar]
+        s = sub.raw(x, y, h)[0][: sub.n_sonar]
+        assert (c <= s + 1e-9).all()
+        for k, deg in enumerate(cfg.sonar.sonar_sensors_deg):
+            dense = rays.cast(x, y, h + math.radians(deg) + fan, cone.ray_length).min()
+            want = 10_000.0 if dense > cone.ray_length - 1e-9 else dense - 10.0
+            assert c[k] <= want + 1e-9
+            assert c[k] == pytest.approx(want, abs=0.05)
+
+
+def test_cone_backend_keeps_its_tables_apart() -> None:
+    cfg = Config()
+    plain = sensor_signature(cfg)
+    cfg.sensors.backend = "cone"
+    assert sensor_signature(cfg) == plain | {"sonar_model": "cone"}
+    cfg.sensors.backend = "pymunk"
+    assert sensor_signature(cfg) == plain

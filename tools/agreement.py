@@ -3,8 +3,10 @@
 For each arena, ``--poses`` random free poses (noise off): counts the poses whose
 noise-free distances differ by more than 1e-6 in (or whose camera markers differ), the
 poses whose encoded state differs, and the poses whose every distance is bit-identical
-(:func:`koolio_pymunk.agreement.compare_backends`). Arenas run in parallel, one process
-each (``--jobs``). Exits 1 on any mismatch.
+(:func:`koolio_pymunk.agreement.compare_backends`); then how often the exact-cone sonar
+model (``sensors.backend: cone``) encodes differently from the paper's sub-arcs
+(:func:`koolio_pymunk.agreement.cone_disagreement`). Arenas run in parallel, one process
+each (``--jobs``). Exits 1 on any fast/reference mismatch.
 
     .venv/bin/python tools/agreement.py --poses 100000 --out agreement.json
 
@@ -24,11 +26,12 @@ ARENAS = ("hallway", "room", "obstacles")
 
 
 def one(arena: str, poses: int, seed: int, noise: str) -> dict:
-    from koolio_pymunk.agreement import compare_backends
+    from koolio_pymunk.agreement import compare_backends, cone_disagreement
 
     t = time.perf_counter()
     out = compare_backends(arena, poses, seed=seed, noise=noise).as_dict()
     out["seconds"] = round(time.perf_counter() - t, 1)
+    out["cone"] = cone_disagreement(arena, poses, seed=seed).as_dict()
     return out
 
 
@@ -57,6 +60,14 @@ def main(argv: list[str] | None = None) -> int:
             f"{r['arena']:>10} {r['poses']:>8} {r['distance_mismatches']:>15} "
             f"{r['state_mismatches']:>15} {r['bit_identical']:>14} "
             f"{r['max_abs_diff']:>14.3g} {r['seconds']:>6}"
+        )
+    print("exact-cone sonar model (backend: cone) vs the paper's sub-arcs, after encoding:")
+    for r in rows:
+        c = r["cone"]
+        print(
+            f"{r['arena']:>10}: state differs on {c['state_differs']:.1%} of poses; per sonar "
+            f"group {', '.join(f'{g:.1%}' for g in c['group_differs'])}; "
+            f"cone farther than sub-arcs: {c['cone_not_nearer']}"
         )
     if args.out:
         with open(args.out, "w", encoding="utf-8") as fh:
