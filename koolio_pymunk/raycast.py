@@ -78,11 +78,22 @@ def wall_array(world: World) -> np.ndarray:
     return np.ascontiguousarray(np.array(rows, dtype=np.float64).reshape(-1, WALL_COLUMNS))
 
 
+#: Headings whose ray directions a robot's trigonometry cache keeps (round robin). A
+#: learning robot often turns back to a heading it just had: 4 catch most of them.
+TRIG_SLOTS = 4
+
+
 def new_trig(n_rays: int, n_robots: int | None = None) -> np.ndarray:
-    """An empty heading/trigonometry cache for :func:`sense_one` (one row per robot)."""
-    shape = (1 + 2 * n_rays,) if n_robots is None else (n_robots, 1 + 2 * n_rays)
+    """An empty trigonometry cache for :func:`sense_one` (one per robot with ``n_robots``).
+
+    Rows ``0 .. TRIG_SLOTS - 1`` each hold a heading and the ``cos`` and ``sin`` of every
+    ray at that heading; element 0 of the last row is the slot to fill next.
+    """
+    shape = (TRIG_SLOTS + 1, 1 + 2 * n_rays)
+    if n_robots is not None:
+        shape = (n_robots, *shape)
     out = np.zeros(shape)
-    out[..., 0] = np.nan  # no heading cached yet (NaN equals nothing)
+    out[..., :TRIG_SLOTS, 0] = np.nan  # no heading cached yet (NaN equals nothing)
     return out
 
 
@@ -328,30 +339,23 @@ def sense_one(
     Writes ``raw`` = sonar edge distances, goal per camera, end-of-world per camera,
     compass units (what ``SensorSuite`` noises next), ``rays`` = every sub-arc ray's
     centre distance and ``eow_k`` = the marker each camera sees (-1: none).
-    ``trig`` (``1 + 2 * rays`` floats) caches the heading it holds and every ray's
-    ``cos`` and ``sin`` at that heading: moves and stops keep the heading, so only
-    rotations pay for the trigonometry (the values are the same either way).
+    ``trig`` (:func:`new_trig`) caches every ray's ``cos`` and ``sin`` for the last few
+    headings: moves and stops keep the heading and turns often come back to one, so few
+    readings pay for the trigonometry (the values are the same either way).
     """
     length = params[0]
     radius = params[1]
     far = params[2]
     half_arc = params[3]
-    n_sonar, n_sub = ray_offsets.shape
+    n_sonar = ray_offsets.shape[0]
     n_cam = camera_dirs.shape[0]
-    n_rays = n_sonar * n_sub
-    if trig[0] != h and params[4] == 0.0:
-        for s in range(n_sonar):
-            for i in range(n_sub):
-                angle = h + ray_offsets[s, i]
-                trig[1 + s * n_sub + i] = math.cos(angle)
-                trig[1 + n_rays + s * n_sub + i] = math.sin(angle)
-        trig[0] = h
     near = np.empty(walls.shape[0], np.int64)
     n_near = _near_walls(x, y, length, walls, near)
     if params[4] == 1.0:
         _sense_cones(x, y, h, ray_offsets, params, walls, near, n_near, raw, rays)
     else:
-        _sense_sub_arcs(x, y, ray_offsets, params, walls, near, n_near, raw, rays, trig)
+        directions = _ray_directions(h, ray_offsets, trig)
+        _sense_sub_arcs(x, y, ray_offsets, params, walls, near, n_near, raw, rays, directions)
     goal2 = goal.reshape(1, 2)
     for c in range(n_cam):
         direction = h + camera_dirs[c]
@@ -360,6 +364,28 @@ def sense_one(
         raw[n_sonar + n_cam + c] = d
         eow_k[c] = k
     raw[n_sonar + 2 * n_cam] = (h / TWO_PI) * 256.0
+
+
+@numba.njit(cache=True)
+def _ray_directions(h: float, ray_offsets: np.ndarray, trig: np.ndarray) -> np.ndarray:
+    """The row of ``trig`` holding ``cos`` and ``sin`` of every ray at heading ``h``
+    (``cos(h + offset)``, as the reference computes them), filled if not cached."""
+    slots = trig.shape[0] - 1
+    for k in range(slots):
+        if trig[k, 0] == h:
+            return trig[k]
+    k = int(trig[slots, 0])
+    trig[slots, 0] = (k + 1) % slots
+    row = trig[k]
+    n_sonar, n_sub = ray_offsets.shape
+    n_rays = n_sonar * n_sub
+    for s in range(n_sonar):
+        for i in range(n_sub):
+            angle = h + ray_offsets[s, i]
+            row[1 + s * n_sub + i] = math.cos(angle)
+            row[1 + n_rays + s * n_sub + i] = math.sin(angle)
+    row[0] = h
+    return row
 
 
 @numba.njit(cache=True)
@@ -398,7 +424,8 @@ def _sense_sub_arcs(
     rays: np.ndarray,
     trig: np.ndarray,
 ) -> None:
-    """The paper's model: the nearest hit over each sonar's sub-arc rays."""
+    """The paper's model: the nearest hit over each sonar's sub-arc rays (``trig``: one
+    cache row of :func:`_ray_directions`)."""
     length, radius, far = params[0], params[1], params[2]
     n_sonar, n_sub = ray_offsets.shape
     n_rays = n_sonar * n_sub

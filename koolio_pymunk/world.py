@@ -106,6 +106,18 @@ def chipmunk_step(space: pymunk.Space) -> Callable[[float], None]:
         return space.step
 
 
+def chipmunk_set_velocity() -> Callable[[pymunk.Body, tuple[float, float]], None]:
+    """``body.velocity = v`` as the bare ``cpBodySetVelocity`` call it makes (pymunk's
+    attribute hooks around it cost more than the call); ``setattr`` if not pymunk 7."""
+    try:
+        from pymunk._chipmunk import lib
+
+        set_v = lib.cpBodySetVelocity
+        return lambda body, v: set_v(body._body, v)
+    except (ImportError, AttributeError):  # pragma: no cover - other pymunk layouts
+        return lambda body, v: setattr(body, "velocity", v)
+
+
 def copy_spacing(segments: Sequence[tuple[Point, Point]], radius: float) -> float:
     """A power of two wider than the arena plus two robot diameters and a margin."""
     xs = [p[0] for seg in segments for p in seg]
@@ -122,6 +134,7 @@ class World:
         self.segments = [(tuple(map(float, a)), tuple(map(float, b))) for a, b in segments]
         self.space = pymunk.Space()
         self._step = chipmunk_step(self.space)
+        self._set_velocity = chipmunk_set_velocity()
         self.space.collision_bias = 0.0
         self.space.collision_slop = COLLISION_SLOP
         self.space.iterations = 20
@@ -214,6 +227,7 @@ class World:
         """
         movers: list[int] = []
         heading = self.heading
+        set_velocity = self._set_velocity
         for i, action in enumerate(actions):
             if action == _ROTATE_LEFT:
                 heading[i] = (heading[i] + arc) % TWO_PI
@@ -222,9 +236,8 @@ class World:
             elif action in (_FORWARD, _REVERSE):
                 sign = 1.0 if action == _FORWARD else -1.0
                 h = heading[i]
-                self.bodies[i].velocity = (
-                    sign * distance * math.cos(h),
-                    sign * distance * math.sin(h),
+                set_velocity(
+                    self.bodies[i], (sign * distance * math.cos(h), sign * distance * math.sin(h))
                 )
                 movers.append(i)
         if movers:
@@ -234,7 +247,7 @@ class World:
     def move(self, i: int, distance: float) -> None:
         """Move robot ``i`` alone by ``distance`` along its heading (negative: backwards)."""
         h = self.heading[i]
-        self.bodies[i].velocity = (distance * math.cos(h), distance * math.sin(h))
+        self._set_velocity(self.bodies[i], (distance * math.cos(h), distance * math.sin(h)))
         self._wake_only([i])
         self._integrate(abs(distance), [i])
 
@@ -292,9 +305,9 @@ class World:
 
     def _stop(self) -> None:
         """Zero the velocity of every awake robot (sleeping ones are at rest)."""
-        bodies = self.bodies
+        bodies, set_velocity = self.bodies, self._set_velocity
         for i in self.awake:
-            bodies[i].velocity = (0.0, 0.0)
+            set_velocity(bodies[i], (0.0, 0.0))
 
     # -- geometry queries (for tests and the viewer) ----------------------------------
     def wall_clearance(self, i: int = 0) -> float:
