@@ -47,14 +47,26 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+import numba
 import numpy as np
 import pymunk.batch
 
 from .env import KoolioEnv
+from .qkernel import (
+    EVENTS,
+    RESCUE_DRAW,
+    TERMINAL,
+    TRUNCATED,
+    SharedTable,
+    choose,
+    learn,
+    update,
+    zone_arrays,
+)
 from .qtable import QTableStore, load_qtable
 from .raycast import new_trig, sense_batch, sense_one
 from .readout import readout, readout_batch
-from .rescue import rescue_robot, wants_rescue
+from .rescue import rescue_robot
 from .training import (
     EpisodeResult,
     LogWriter,
@@ -93,13 +105,29 @@ class PoseReader:
         self.buffer.clear()
         pymunk.batch.get_space_bodies(self.world.space, self.fields, self.buffer)
         ids = np.frombuffer(self.buffer.int_buf(), dtype=np.intp)
-        pos = np.frombuffer(self.buffer.float_buf()).reshape(-1, 2)
-        at = np.minimum(np.searchsorted(self.sorted_ids, ids), self.n - 1)
-        robot = self.sorted_ids[at] == ids  # drops the static body
+        pos = np.frombuffer(self.buffer.float_buf())
         out = np.empty((self.n, 2))
-        out[self.order[at[robot]]] = pos[robot]
-        out[:, 0] -= self.offsets
+        _robot_order(ids, pos, self.sorted_ids, self.order, self.offsets, out)
         return out
+
+
+@numba.njit(cache=True)
+def _robot_order(
+    ids: np.ndarray,
+    pos: np.ndarray,
+    sorted_ids: np.ndarray,
+    order: np.ndarray,
+    offsets: np.ndarray,
+    out: np.ndarray,
+) -> None:
+    """Row ``order[k]`` of ``out`` = the position listed with ``sorted_ids[k]``, minus its
+    robot's x offset; bodies that are no robot (the static body) are skipped."""
+    for j in range(ids.shape[0]):
+        k = np.searchsorted(sorted_ids, ids[j])
+        if k < sorted_ids.shape[0] and sorted_ids[k] == ids[j]:
+            r = order[k]
+            out[r, 0] = pos[2 * j] - offsets[r]
+            out[r, 1] = pos[2 * j + 1]
 
 
 class Fleet:
@@ -137,8 +165,8 @@ class Fleet:
 
     def sense_all(
         self, xy: np.ndarray, headings: list[float], draws: np.ndarray
-    ) -> tuple[list[int], list[bool], list[bool]]:
-        """State key, Bump and goal-close of every robot."""
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """State key of every robot, and their Bump and goal-close flags (``N x 2``)."""
         k = self.k
         sense_batch(
             np.ascontiguousarray(xy[:, 0]),
@@ -158,7 +186,7 @@ class Fleet:
         readout_batch(
             self.raw, draws, *self._args(), self.out, self.eow_k, self.codes, self.keys, self.flags
         )
-        return self.keys.tolist(), self.flags[:, 0].tolist(), self.flags[:, 1].tolist()
+        return self.keys, self.flags
 
     def sense_one(self, r: int, rng: np.random.Generator) -> tuple[int, bool, bool]:
         """Robot ``r`` alone (after a reset or a rescue), noise from ``rng``."""
@@ -184,19 +212,15 @@ class Fleet:
 
 
 class _Episode:
-    """The running episode of one robot."""
+    """What Python keeps of one robot's running episode (counters live in arrays)."""
 
-    __slots__ = ("bumps", "epsilon", "goal", "key", "rescued", "reward", "rng", "start", "steps")
+    __slots__ = ("epsilon", "goal", "rescued", "rng", "start")
 
     def __init__(self, start: int, rng: np.random.Generator, epsilon: float, goal: str) -> None:
         self.start = start
         self.rng = rng
         self.epsilon = epsilon
         self.goal = goal
-        self.key = 0
-        self.steps = 0
-        self.bumps = 0
-        self.reward = 0.0
         self.rescued = False
 
 
@@ -232,6 +256,7 @@ class _Run:
         cfg = env.config
         self.env, self.cfg, self.store = env, cfg, store
         self.table = store.open(env.layout, sensor_signature(cfg), cfg.learner.q_init)
+        self.shared = SharedTable(self.table)
         self.first = int(self.table.meta.get("episodes", 0))
         self.budget = episodes
         self.seed = seed
@@ -248,12 +273,31 @@ class _Run:
         self.finished = 0
         self.unsaved = 0
         self.eps: list[_Episode | None] = [None] * robots
+        # Per robot, for the compiled loop (qkernel): state key, activity, epsilon,
+        # this episode's steps, bumps, return, and the last step's event code.
+        self.state = np.zeros(robots, np.int64)
+        self.active = np.zeros(robots, np.bool_)
+        self.epsilon = np.zeros(robots)
+        self.steps = np.zeros(robots, np.int64)
+        self.bumps = np.zeros(robots, np.int64)
+        self.total = np.zeros(robots)
+        self.event = np.zeros(robots, np.int64)
+        self.actions = np.zeros(robots, np.int64)
+        rw = cfg.rewards
+        self.reward = np.array(
+            [rw.goal, rw.end_of_world, rw.bump, rw.stop, rw.turn, rw.forward, rw.reverse],
+            dtype=np.float64,
+        )
+        rescue = cfg.rescue
+        self.rescue_after = rescue.max_steps_before_rescue if rescue.auto_rescue_toggle else -1
+        self.zones = zone_arrays(env.zones)
 
     # -- episodes ---------------------------------------------------------------------
     def _start(self, r: int) -> None:
         """Start episode number ``first + started`` on robot ``r`` (or idle it)."""
         if self.started >= self.budget:
             self.eps[r] = None
+            self.active[r] = False
             return
         k = self.first + self.started
         self.started += 1
@@ -270,7 +314,11 @@ class _Run:
             else float(rng.uniform(0.0, 2.0 * np.pi))
         )
         world.place(r, start.at, float(heading))
-        ep.key = self.fleet.sense_one(r, rng)[0]
+        self.state[r] = self.fleet.sense_one(r, rng)[0]
+        self.active[r] = True
+        self.epsilon[r] = ep.epsilon
+        self.steps[r] = self.bumps[r] = 0
+        self.total[r] = 0.0
         self.eps[r] = ep
 
     def _finish(self, r: int, outcome: str) -> None:
@@ -279,7 +327,14 @@ class _Run:
         e = self.first + self.finished
         self.finished += 1
         res = EpisodeResult(
-            e, ep.reward, ep.steps, ep.bumps, outcome, ep.rescued, ep.epsilon, ep.goal
+            e,
+            float(self.total[r]),
+            int(self.steps[r]),
+            int(self.bumps[r]),
+            outcome,
+            ep.rescued,
+            ep.epsilon,
+            ep.goal,
         )
         self.table.meta["episodes"] = e + 1
         self.log.write(res)
@@ -287,9 +342,13 @@ class _Run:
         self.progress.add(res)
         self.unsaved += 1
         if self.unsaved >= self.save_every or self.finished == self.budget:
-            self.store.save(self.table)
+            self._save()
             self.unsaved = 0
         self._start(r)
+
+    def _save(self) -> None:
+        self.shared.sync()
+        self.store.save(self.table)
 
     # -- the loop -----------------------------------------------------------------------
     def run(
@@ -317,6 +376,7 @@ class _Run:
             self._interrupt(discard_unfinished, report)
         finally:
             self.log.close()
+        self.shared.sync()
         p = self.progress
         return TrainResult(
             self.table,
@@ -335,16 +395,17 @@ class _Run:
     def _interrupt(self, discard: bool, report: Callable[[str], None] | None) -> None:
         if discard:
             self.table = load_qtable(self.store.path)
+            self.shared = SharedTable(self.table)
             if report:
                 report("interrupted: unfinished episodes discarded (Exit Without Save)")
             return
-        for ep in self.eps:
+        for r, ep in enumerate(self.eps):
             if ep is not None:
                 res = EpisodeResult(
                     self.first + self.finished,
-                    ep.reward,
-                    ep.steps,
-                    ep.bumps,
+                    float(self.total[r]),
+                    int(self.steps[r]),
+                    int(self.bumps[r]),
                     "interrupted",
                     ep.rescued,
                     ep.epsilon,
@@ -352,91 +413,54 @@ class _Run:
                 )
                 self.log.write(res)
                 self.results.append(res)
-        self.store.save(self.table)
+        self._save()
         if report:
             report("interrupted: unfinished episodes folded into the Q-table and saved (Exit)")
 
     def _tick(self) -> None:
-        n, eps, rows = self.n, self.eps, self.table.rows
-        rng = self.tick_rng
-        n_actions = self.table.layout.n_actions
-        explore = rng.random(n).tolist()
-        random_action = rng.integers(n_actions, size=n).tolist()
-        tie = rng.random(n).tolist()
+        n, rng, sh = self.n, self.tick_rng, self.shared
+        explore = rng.random(n)
+        random_action = rng.integers(self.table.layout.n_actions, size=n)
+        tie = rng.random(n)
         draws = self.fleet.suite.draw_noise(rng, n * self.fleet.k.n_raw).reshape(n, -1)
-        actions = [STOP] * n
-        for r in range(n):
-            ep = eps[r]
-            if ep is None:
-                continue
-            if explore[r] < ep.epsilon:
-                actions[r] = random_action[r]
-                continue
-            row = rows.get(ep.key)
-            if row is None:
-                actions[r] = random_action[r]
-                continue
-            best = max(row)
-            count = row.count(best)
-            if count == 1:
-                actions[r] = row.index(best)
-            else:
-                ties = [a for a, q in enumerate(row) if q == best]
-                actions[r] = ties[int(tie[r] * count)]
+        sh.reserve(2 * n)
+        choose(sh.index, sh.q, self.state, self.active, self.epsilon, explore, random_action,
+               tie, self.actions)  # fmt: skip
         world = self.world
-        world.act(actions, self.env._distance, self.env._arc)
+        world.act(self.actions.tolist(), self.env._distance, self.env._arc)
         xy = self.poses.xy()
-        keys, bumps, closes = self.fleet.sense_all(xy, world.heading, draws)
-        self._learn(actions, keys, bumps, closes, xy.tolist())
-
-    def _learn(
-        self,
-        actions: list[int],
-        keys: list[int],
-        bumps: list[bool],
-        closes: list[bool],
-        xy: list[list[float]],
-    ) -> None:
-        cfg = self.cfg
-        rw = cfg.rewards
-        by_action = (rw.stop, rw.turn, rw.turn, rw.forward, rw.reverse)
-        alpha, gamma = cfg.learner.alpha, cfg.learner.gamma
-        q_init = self.table.q_init
-        rows = self.table.rows
-        row_of = self.table.row
-        contains = self.env.zones.contains
-        rescue, cap = cfg.rescue, cfg.episode.max_steps
-        for r in range(self.n):
-            ep = self.eps[r]
-            if ep is None:
-                continue
-            a, bump = actions[r], bumps[r]
-            terminal = True
-            if a == STOP and closes[r]:
-                event, reward = "goal", rw.goal
-            elif contains(xy[r][0], xy[r][1]):
-                event, reward = "end_of_world", rw.end_of_world
-            elif bump:
-                event, reward, terminal = "bump", rw.bump, False
-            else:
-                event, reward, terminal = "", by_action[a], False
-            ep.steps += 1
-            ep.bumps += bump
-            ep.reward += reward
-            nxt = keys[r]
-            if not terminal and wants_rescue(rescue, ep.steps, bump, ep.rng):
-                rescue_robot(self.world, r, rescue, self.env._distance, ep.rng)
-                nxt = self.fleet.sense_one(r, ep.rng)[0]
-                ep.rescued = True
-            row = row_of(ep.key)
-            if terminal:
-                target = reward
-            else:
-                nrow = rows.get(nxt)
-                target = reward + gamma * (max(nrow) if nrow is not None else q_init)
-            row[a] += alpha * (target - row[a])
-            ep.key = nxt
-            if terminal:
-                self._finish(r, event)
-            elif cap > 0 and ep.steps >= cap:
+        keys, flags = self.fleet.sense_all(xy, world.heading, draws)
+        lc = self.cfg.learner
+        r = 0
+        while r < n:
+            r, why = learn(
+                r, self.active, self.actions, self.state, keys, flags[:, 0], flags[:, 1], xy,
+                self.reward, lc.alpha, lc.gamma, self.zones, self.rescue_after,
+                self.cfg.episode.max_steps, self.steps, self.bumps, self.total, self.event,
+                *sh.args(),
+            )  # fmt: skip
+            if why == RESCUE_DRAW:
+                self._rescue_step(r, int(keys[r]))
+            elif why == TERMINAL:
+                self._finish(r, EVENTS[self.event[r]])
+            elif why == TRUNCATED:
                 self._finish(r, "truncated")
+            r += 1
+
+    def _rescue_step(self, r: int, nxt: int) -> None:
+        """Robot ``r`` bumped past ``max_steps_before_rescue``: the rescue draw, maybe a
+        rescue (new reading), then its update and the step cap, as in ``KoolioEnv``."""
+        ep = self.eps[r]
+        assert ep is not None
+        if ep.rng.random() < self.cfg.rescue.rescue_chance:
+            rescue_robot(self.world, r, self.cfg.rescue, self.env._distance, ep.rng)
+            nxt = self.fleet.sense_one(r, ep.rng)[0]
+            ep.rescued = True
+        lc = self.cfg.learner
+        code = int(self.event[r])
+        update(*self.shared.args(), lc.alpha, lc.gamma, int(self.state[r]),
+               int(self.actions[r]), float(self.reward[code]), nxt, False)  # fmt: skip
+        self.state[r] = nxt
+        cap = self.cfg.episode.max_steps
+        if cap > 0 and self.steps[r] >= cap:
+            self._finish(r, "truncated")

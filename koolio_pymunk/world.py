@@ -266,9 +266,7 @@ class World:
         for i in self.awake:
             if i not in awake:
                 bodies[i].sleep()
-        for i in movers:
-            if bodies[i].is_sleeping:
-                bodies[i].activate()
+        # The movers are awake already: setting a velocity activates a body.
         self.awake = movers
 
     def _integrate(self, distance: float, movers: list[int]) -> None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import itertools
 import math
 
 import numpy as np
@@ -124,3 +125,96 @@ def test_many_robot_world_keeps_every_robot_in_its_arena() -> None:
 def test_train_many_accepts_any_robot_count(tmp_path, robots: int) -> None:
     _, _, res = run(tmp_path, f"r{robots}", episodes=3, robots=robots)
     assert res.episodes_run == 3
+
+
+# -- the compiled loop (qkernel) against the Python code it replaces ------------------------
+
+
+def test_in_zone_matches_end_zones_contains() -> None:
+    from koolio_pymunk.env import EndZones
+    from koolio_pymunk.qkernel import in_zone, zone_arrays
+
+    for name in ("hallway", "room", "obstacles"):
+        zones = EndZones(load_arena(name).to_world(), R)
+        args = zone_arrays(zones)
+        rng = np.random.default_rng(1)
+        pts = [tuple(p) for p in rng.uniform(-60, 1700, (3000, 2))]
+        pts += [tuple(map(float, v)) for poly in zones.polygons for v in poly]  # corners
+        for poly in zones.polygons:  # edge midpoints: on the boundary, so outside
+            pts += [((a[0] + b[0]) / 2, (a[1] + b[1]) / 2) for a, b in itertools.pairwise(poly)]
+        got = [in_zone(x, y, *args) for x, y in pts]
+        assert got == [zones.contains(x, y) for x, y in pts]
+        assert any(got)
+
+
+def test_update_and_choose_match_the_learner() -> None:
+    from koolio_pymunk.config import LearnerConfig
+    from koolio_pymunk.learner import QLearner
+    from koolio_pymunk.qkernel import SharedTable, choose, update
+    from koolio_pymunk.qtable import KeywordLayout, QTable
+
+    layout = KeywordLayout((("A", 4),))
+    ref = QTable(layout, q_init=0.5)
+    agent = QLearner(ref, LearnerConfig(alpha=0.3, gamma=0.9), np.random.default_rng(0))
+    shared = SharedTable(QTable(layout, q_init=0.5), reserve=2)
+    rng = np.random.default_rng(2)
+    for _ in range(300):
+        s, a, nxt = int(rng.integers(4)), int(rng.integers(5)), int(rng.integers(4))
+        reward, terminal = float(rng.normal()), bool(rng.random() < 0.2)
+        agent.update(s, a, reward, nxt, terminal)
+        shared.reserve(2)
+        update(*shared.args(), 0.3, 0.9, s, a, reward, nxt, terminal)
+    ref.row(3)[:] = [1.0, 2.0, 2.0, 0.0, 2.0]  # a three-way tie
+    shared.sync()
+    shared.table.rows[3] = [1.0, 2.0, 2.0, 0.0, 2.0]
+    shared = SharedTable(shared.table)
+    assert shared.table.rows == ref.rows
+    states = np.array([0, 1, 2, 3, 3, 3, 7], np.int64)
+    tie = np.array([0.1, 0.5, 0.9, 0.0, 0.5, 0.99, 0.3])
+    explore = np.array([0.9, 0.01, 0.9, 0.9, 0.9, 0.9, 0.9])
+    random_action = np.array([4, 4, 4, 4, 4, 4, 4], np.int64)
+    actions = np.zeros(7, np.int64)
+    choose(shared.index, shared.q, states, np.ones(7, np.bool_), np.full(7, 0.05), explore,
+           random_action, tie, actions)  # fmt: skip
+    for r, s in enumerate(states.tolist()):
+        row = ref.peek(s)
+        if explore[r] < 0.05 or row is None:
+            want = 4
+        else:
+            ties = [a for a, q in enumerate(row) if q == max(row)]
+            want = ties[int(tie[r] * len(ties))]
+        assert actions[r] == want
+    assert actions[3:6].tolist() == [1, 2, 4]
+
+
+@pytest.mark.parametrize("goal_close", [False, True])
+@pytest.mark.parametrize("eow", [False, True])
+@pytest.mark.parametrize("bump", [False, True])
+def test_learn_judges_like_the_rules(goal_close: bool, eow: bool, bump: bool) -> None:
+    from koolio_pymunk.config import RewardConfig
+    from koolio_pymunk.env import EndZones
+    from koolio_pymunk.qkernel import EVENTS, SharedTable, learn, zone_arrays
+    from koolio_pymunk.qtable import KeywordLayout, QTable
+    from koolio_pymunk.rules import judge
+
+    rw = RewardConfig(stop=-2.5, reverse=-3.5, turn=-1.25, forward=-0.75)
+    reward = np.array([rw.goal, rw.end_of_world, rw.bump, rw.stop, rw.turn, rw.forward,
+                       rw.reverse])  # fmt: skip
+    zones = EndZones(load_arena("room").to_world(), R)
+    inside = (264.0, 96.0)  # the room's exit stub
+    for action in range(5):
+        j = judge(action, goal_close, eow, bump, rw)
+        shared = SharedTable(QTable(KeywordLayout((("A", 4),))))
+        xy = np.array([inside if eow else (100.0, 100.0)])
+        steps, bumps, total, event = (np.zeros(1, np.int64), np.zeros(1, np.int64),
+                                      np.zeros(1), np.zeros(1, np.int64))  # fmt: skip
+        r, why = learn(0, np.ones(1, np.bool_), np.array([action]), np.zeros(1, np.int64),
+                       np.ones(1, np.int64), np.array([bump]), np.array([goal_close]), xy,
+                       reward, 0.5, 0.9, zone_arrays(zones), -1, 0, steps, bumps, total,
+                       event, *shared.args())  # fmt: skip
+        assert EVENTS[event[0]] == j.event and total[0] == j.reward
+        assert (why == 2) == j.terminated and (r, steps[0], bumps[0]) == (
+            0 if j.terminated else 1,
+            1,
+            bump,
+        )
