@@ -194,7 +194,7 @@ class KoolioEnv(gym.Env):
         prev_key = self.state_key
         self.world.act((action,), self._distance, self._arc)
         bump, goal_close = self._sense()
-        x, y, _ = self.world.pose(0)
+        x, y, _ = self._pose
         j = judge(action, goal_close, self.zones.contains(x, y), bump, self.config.rewards)
         self.steps += 1
         self.bumps += int(bump)
@@ -239,7 +239,8 @@ class KoolioEnv(gym.Env):
 
     def _sense(self) -> tuple[bool, bool]:
         """Read the sensors; sets ``state_key`` and returns ``(bump, goal_close)``."""
-        self.state_key, bump, goal_close = self.sensors.sense(self.world.pose(0), self.np_random)
+        self._pose = self.world.pose(0)
+        self.state_key, bump, goal_close = self.sensors.sense(self._pose, self.np_random)
         return bump, goal_close
 
     @property

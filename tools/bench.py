@@ -288,7 +288,7 @@ def main(argv: list[str] | None = None) -> int:
         print(table_line("fast backend steps/s", fast, f"x{ratio:.1f} reference"))
         e2e = end_to_end(50 if q else 200, folder)
         print(table_line("train end to end (saves) steps/s", e2e))
-        multi = many(args.robots, 100 if q else 600, folder)
+        multi = many(args.robots, 300 if q else 3000, folder)
         print(table_line(f"{args.robots} robots robot-steps/s", multi))
         report.update(reference=ref, fast=fast, end_to_end=e2e, many=multi)
 
