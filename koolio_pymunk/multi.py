@@ -64,7 +64,7 @@ from .qkernel import (
     zone_arrays,
 )
 from .qtable import QTableStore, load_qtable
-from .raycast import new_trig, sense_batch, sense_one
+from .raycast import any_near_wall, new_trig, sense_batch, sense_one
 from .readout import readout, readout_batch
 from .rescue import rescue_robot
 from .training import (
@@ -283,6 +283,8 @@ class _Run:
         self.total = np.zeros(robots)
         self.event = np.zeros(robots, np.int64)
         self.actions = np.zeros(robots, np.int64)
+        self.xy = np.zeros((robots, 2))
+        """Every robot's position as of its last move, reset or rescue."""
         rw = cfg.rewards
         self.reward = np.array(
             [rw.goal, rw.end_of_world, rw.bump, rw.stop, rw.turn, rw.forward, rw.reverse],
@@ -314,6 +316,7 @@ class _Run:
             else float(rng.uniform(0.0, 2.0 * np.pi))
         )
         world.place(r, start.at, float(heading))
+        self.xy[r] = world.pose(r)[:2]
         self.state[r] = self.fleet.sense_one(r, rng)[0]
         self.active[r] = True
         self.epsilon[r] = ep.epsilon
@@ -427,8 +430,8 @@ class _Run:
         choose(sh.index, sh.q, self.state, self.active, self.epsilon, explore, random_action,
                tie, self.actions)  # fmt: skip
         world = self.world
-        world.act(self.actions.tolist(), self.env._distance, self.env._arc)
-        xy = self.poses.xy()
+        world.act(self.actions.tolist(), self.env._distance, self.env._arc, self._near_wall)
+        xy = self.xy = self.poses.xy()
         keys, flags = self.fleet.sense_all(xy, world.heading, draws)
         lc = self.cfg.learner
         r = 0
@@ -447,6 +450,10 @@ class _Run:
                 self._finish(r, "truncated")
             r += 1
 
+    def _near_wall(self, movers: list[int], reach: float) -> bool:
+        """World.act's sub-step choice from the known positions (``self.xy``)."""
+        return any_near_wall(self.xy, np.array(movers, np.int64), reach, self.fleet.walls)
+
     def _rescue_step(self, r: int, nxt: int) -> None:
         """Robot ``r`` bumped past ``max_steps_before_rescue``: the rescue draw, maybe a
         rescue (new reading), then its update and the step cap, as in ``KoolioEnv``."""
@@ -454,6 +461,7 @@ class _Run:
         assert ep is not None
         if ep.rng.random() < self.cfg.rescue.rescue_chance:
             rescue_robot(self.world, r, self.cfg.rescue, self.env._distance, ep.rng)
+            self.xy[r] = self.world.pose(r)[:2]
             nxt = self.fleet.sense_one(r, ep.rng)[0]
             ep.rescued = True
         lc = self.cfg.learner

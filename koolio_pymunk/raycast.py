@@ -101,6 +101,26 @@ def new_trig(n_rays: int, n_robots: int | None = None) -> np.ndarray:
 
 
 @numba.njit(cache=True)
+def any_near_wall(xy: np.ndarray, robots: np.ndarray, reach: float, walls: np.ndarray) -> bool:
+    """Whether a wall is nearer than ``reach`` to any of the points ``xy[robots]``.
+
+    Chipmunk's nearest-point test for a segment (``cpClosetPointOnSegment``, distance
+    below the query's maximum), so the answer is what ``space.point_query_nearest``
+    would give for each point, without a Python call per point.
+    """
+    for r in robots:
+        px, py = xy[r, 0], xy[r, 1]
+        for k in range(walls.shape[0]):
+            ax, ay, bx, by = walls[k, 0], walls[k, 1], walls[k, 2], walls[k, 3]
+            dx, dy = ax - bx, ay - by
+            t = min(max((dx * (px - bx) + dy * (py - by)) / (dx * dx + dy * dy), 0.0), 1.0)
+            cx, cy = px - (bx + dx * t), py - (by + dy * t)
+            if math.sqrt(cx * cx + cy * cy) < reach:
+                return True
+    return False
+
+
+@numba.njit(cache=True)
 def _two_prod(a: float, b: float) -> tuple[float, float]:
     """``a * b`` as an exact double-double (Dekker), without fused multiply-add."""
     p = a * b

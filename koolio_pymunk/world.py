@@ -220,10 +220,19 @@ class World:
             body.sleep()  # setting the position woke it: keep it out of others' moves
 
     # -- actions --------------------------------------------------------------------
-    def act(self, actions: Sequence[int], distance: float, arc: float) -> None:
+    def act(
+        self,
+        actions: Sequence[int],
+        distance: float,
+        arc: float,
+        near_wall: Callable[[list[int], float], bool] | None = None,
+    ) -> None:
         """Perform one action per robot: rotations by ``arc`` radians, moves by ``distance``.
 
         All moving robots move together through the same pymunk sub-steps.
+        ``near_wall(movers, reach)`` may answer whether a wall is within ``reach`` of a
+        moving robot (which picks the sub-step; see :meth:`_integrate`) when the caller
+        knows the positions; by default pymunk's nearest-point query answers.
         """
         movers: list[int] = []
         heading = self.heading
@@ -242,7 +251,7 @@ class World:
                 movers.append(i)
         if movers:
             self._wake_only(movers)
-            self._integrate(distance, movers)
+            self._integrate(distance, movers, near_wall)
 
     def move(self, i: int, distance: float) -> None:
         """Move robot ``i`` alone by ``distance`` along its heading (negative: backwards)."""
@@ -269,7 +278,12 @@ class World:
         # The movers are awake already: setting a velocity activates a body.
         self.awake = movers
 
-    def _integrate(self, distance: float, movers: list[int]) -> None:
+    def _integrate(
+        self,
+        distance: float,
+        movers: list[int],
+        near_wall: Callable[[list[int], float], bool] | None = None,
+    ) -> None:
         """Step the space one time unit in equal sub-steps, then settle at rest.
 
         The sub-step is ``radius / 4`` of travel when no wall is within reach of a moving
@@ -282,12 +296,16 @@ class World:
             return
         travel = self.radius / 4.0
         reach = distance + self.radius + travel
-        query = self.space.point_query_nearest
-        bodies = self.bodies
-        for i in movers:
-            if query(bodies[i].position, reach, WALL_ONLY):
+        if near_wall is not None:
+            if near_wall(movers, reach):
                 travel = FINE_STEP
-                break
+        else:
+            query = self.space.point_query_nearest
+            bodies = self.bodies
+            for i in movers:
+                if query(bodies[i].position, reach, WALL_ONLY):
+                    travel = FINE_STEP
+                    break
         n = max(1, math.ceil(distance / travel))
         dt = 1.0 / n
         step = self._step
