@@ -30,7 +30,7 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
 
 
-def _add_env_args(p: argparse.ArgumentParser) -> None:
+def add_env_args(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--arena", default="hallway", help="arena file or built-in name (hallway, room, obstacles)"
     )
@@ -43,21 +43,8 @@ def _add_env_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seed", type=int, default=0, help="run seed (default 0)")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(
-        prog="koolio-pm",
-        description="Koolio, the FCRAR 2008 delivery robot, learning by Q-learning on pymunk.",
-    )
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-
-    p = sub.add_parser("train", help="headless episodic Q-learning")
-    _add_env_args(p)
-    p.add_argument(
-        "--episodes",
-        type=int,
-        default=DEFAULT_EPISODES,
-        help=f"episodes to run (default {DEFAULT_EPISODES})",
-    )
+def add_learning_files_args(p: argparse.ArgumentParser) -> None:
+    """``--qtable`` and ``--log``, shared by ``train`` and ``view``."""
     p.add_argument(
         "--qtable",
         default=DEFAULT_QTABLE,
@@ -66,6 +53,24 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--log", default=DEFAULT_LOG, help=f"per-episode CSV log (default {DEFAULT_LOG})"
     )
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(
+        prog="koolio-pm",
+        description="Koolio, the FCRAR 2008 delivery robot, learning by Q-learning on pymunk.",
+    )
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    p = sub.add_parser("train", help="headless episodic Q-learning")
+    add_env_args(p)
+    p.add_argument(
+        "--episodes",
+        type=int,
+        default=DEFAULT_EPISODES,
+        help=f"episodes to run (default {DEFAULT_EPISODES})",
+    )
+    add_learning_files_args(p)
     p.add_argument(
         "--discard-unfinished",
         action="store_true",
@@ -86,7 +91,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
 
     p = sub.add_parser("eval", help="greedy evaluation of a Q-table")
-    _add_env_args(p)
+    add_env_args(p)
     p.add_argument("--qtable", default=DEFAULT_QTABLE, help="Q-table file")
     p.add_argument("--episodes", type=int, default=100, help="episodes (default 100)")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")

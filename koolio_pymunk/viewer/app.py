@@ -95,23 +95,16 @@ def _speed(text: str) -> float:
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """The flags of ``train`` plus the window's own."""
-    from ..cli import DEFAULT_LOG, DEFAULT_QTABLE, _add_env_args
+    from ..cli import add_env_args, add_learning_files_args
 
-    _add_env_args(p)
+    add_env_args(p)
     p.add_argument(
         "--episodes",
         type=int,
         default=None,
         help="episodes to run, then stop stepping (default: no limit)",
     )
-    p.add_argument(
-        "--qtable",
-        default=DEFAULT_QTABLE,
-        help=f"Q-table file, resumed if present; backup beside it (default {DEFAULT_QTABLE})",
-    )
-    p.add_argument(
-        "--log", default=DEFAULT_LOG, help=f"per-episode CSV log (default {DEFAULT_LOG})"
-    )
+    add_learning_files_args(p)
     p.add_argument(
         "--discard-unfinished",
         action="store_true",
