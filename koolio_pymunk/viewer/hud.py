@@ -16,10 +16,11 @@ import numpy as np
 import pygame
 
 from ..env import KoolioEnv
+from ..plotting import moving_average
 from ..sensors import CAMERA_LEVELS, COMPASS_LEVELS, SONAR_LEVELS, compass_code
 from ..world import ACTION_NAMES
 from .draw import text
-from .session import Session, moving_average
+from .session import Session
 
 Color = tuple[int, int, int]
 
@@ -219,7 +220,7 @@ def draw_curve(
         surface.blit(msg, msg.get_rect(center=plot.center))
         lo, hi = -1.0, 1.0
     else:
-        avg = moving_average(returns, window)
+        avg = moving_average(returns, window).tolist()
         lo, hi = _nice_range(min(returns), max(returns))
         _polyline(surface, plot, returns, lo, hi, CURVE_RETURN, 1)
         _polyline(surface, plot, avg, lo, hi, CURVE_AVERAGE, 3)

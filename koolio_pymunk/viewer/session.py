@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import csv
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -250,19 +249,3 @@ class Session:
             self.results.append(res)
         self.log.close()
         return res
-
-
-def moving_average(values: Sequence[float], window: int) -> list[float]:
-    """Trailing mean over the last ``window`` values (fewer at the start).
-
-    >>> moving_average([1, 2, 3, 4], 2)
-    [1.0, 1.5, 2.5, 3.5]
-    """
-    out: list[float] = []
-    total = 0.0
-    for i, v in enumerate(values):
-        total += v
-        if i >= window:
-            total -= values[i - window]
-        out.append(total / min(i + 1, window))
-    return out
