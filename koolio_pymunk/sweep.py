@@ -832,7 +832,7 @@ def plot_curves(
         ylim=(-0.02, 1.02),
     )
     ax2.set(title="greedy evaluation checkpoints", xlabel="episode", ylim=(-0.02, 1.02))
-    ax1.legend(fontsize="small", title="configuration (seeds)", loc="upper left")
+    ax1.legend(fontsize="small", title="configuration (seeds)", loc="lower right")
     for ax in (ax1, ax2):
         ax.grid(alpha=0.3)
     fig.suptitle(f"{title or out.name}: mean over seeds, band = min..max")
