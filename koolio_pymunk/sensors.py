@@ -402,8 +402,8 @@ def sonar_ray_offsets(angles_deg: Sequence[float], arc_deg: float, sub_arcs: int
 def compass_code(units: float) -> int:
     """East 0, North 1, West 2, South 3; boundaries at NE/NW/SW/SE.
 
-    >>> [compass_code(u) for u in (0, 31.9, 32.1, 100, 160, 224.1, 255)]
-    [0, 0, 1, 2, 2, 0, 0]
+    >>> [compass_code(u) for u in (0, 31.9, 32.1, 100, 150, 160, 224.1, 255)]
+    [0, 0, 1, 2, 2, 3, 0, 0]
     """
     deg = (units / 256.0 * 360.0) % 360.0
     return int(((deg + 45.0) % 360.0) // 90.0)
