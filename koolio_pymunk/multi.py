@@ -64,7 +64,7 @@ from .qkernel import (
     zone_arrays,
 )
 from .qtable import QTableStore, load_qtable
-from .raycast import any_near_wall, new_trig, sense_batch, sense_one
+from .raycast import any_near_wall, new_trig, sense_batch, sense_one, wall_array
 from .readout import readout, readout_batch
 from .rescue import rescue_robot
 from .training import (
@@ -131,7 +131,12 @@ def _robot_order(
 
 
 class Fleet:
-    """Sensing of N robots: the single-robot sensor suite's kernel inputs, N-row buffers."""
+    """Sensing of N robots: the single-robot sensor suite's kernel inputs, N-row buffers.
+
+    Always the compiled kernel (batched over robots), whatever ``sensors.backend`` says:
+    with ``pymunk`` the readings are the same numbers (see ``docs/speed.md``); ``cone``
+    keeps its cone sonar.
+    """
 
     def __init__(self, env: KoolioEnv, world: World) -> None:
         self.k = env.sensors._kernel
@@ -146,7 +151,7 @@ class Fleet:
         self.codes = np.empty((n, len(self.k.bits)), np.int64)
         self.keys = np.empty(n, np.int64)
         self.flags = np.empty((n, 2), np.bool_)
-        self.walls = self.suite.engine.walls
+        self.walls = wall_array(world)  # any backend: the kernel reads robot 0's copy
         self.trig = new_trig(self.k.ray_offsets.size, n)
 
     def _args(self) -> tuple:

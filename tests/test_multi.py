@@ -127,6 +127,19 @@ def test_train_many_accepts_any_robot_count(tmp_path, robots: int) -> None:
     assert res.episodes_run == 3
 
 
+def test_backend_pymunk_senses_the_same_with_many_robots(tmp_path) -> None:
+    """Many robots always sense with the batched kernel: the same table either way."""
+    tables = []
+    for backend in ("fast", "pymunk"):
+        env = small_env()
+        env.config.sensors.backend = backend
+        env = KoolioEnv("room", config=env.config)
+        q = tmp_path / f"{backend}.qtable"
+        train_many(env, QTableStore(q), 4, 3, None, 2, report=None)
+        tables.append(q.read_bytes())
+    assert tables[0] == tables[1]
+
+
 # -- the compiled loop (qkernel) against the Python code it replaces ------------------------
 
 
