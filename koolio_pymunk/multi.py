@@ -7,14 +7,19 @@ cap). Their experience goes into one :class:`~koolio_pymunk.qtable.QTable`.
 
 **A tick** (every robot takes one step):
 
-1. every active robot chooses an action epsilon-greedily from the table as it stands;
-2. all robots act together (one set of pymunk sub-steps for the whole space);
+1. every active robot chooses an action epsilon-greedily from the table as it stands
+   (:func:`qkernel.choose`);
+2. all robots act together (one set of pymunk sub-steps for the moving robots; the
+   others sleep);
 3. all robots are sensed in two compiled calls (:func:`raycast.sense_batch`,
-   :func:`readout.readout_batch`: robots x rays x walls);
+   :func:`readout.readout_batch`: robots x rays x walls; always the compiled kernel,
+   which reads what the pymunk reference reads);
 4. **in robot index order**, each robot's step is judged (reward, end of episode),
    rescued if auto rescue fires, and its Table 11 update applied to the shared table
    (so robot ``r`` bootstraps from values robots ``< r`` updated in the same tick);
    a finished episode is logged, and the robot starts a new one if the budget allows.
+   :func:`qkernel.learn` does this compiled and hands each rescue draw and episode end
+   to Python in that same order.
 
 **Numbering.** Episodes are numbered in completion order (robot index order within a
 tick), continuing from the table's ``episodes`` count, and logged in the usual CSV
