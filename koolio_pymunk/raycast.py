@@ -104,9 +104,11 @@ def new_trig(n_rays: int, n_robots: int | None = None) -> np.ndarray:
 def any_near_wall(xy: np.ndarray, robots: np.ndarray, reach: float, walls: np.ndarray) -> bool:
     """Whether a wall is nearer than ``reach`` to any of the points ``xy[robots]``.
 
-    Chipmunk's nearest-point test for a segment (``cpClosetPointOnSegment``, distance
-    below the query's maximum), so the answer is what ``space.point_query_nearest``
-    would give for each point, without a Python call per point.
+    The test of Chipmunk's nearest-point query for a segment (``cpClosetPointOnSegment``,
+    distance below the query's maximum), in arena coordinates: what
+    ``space.point_query_nearest`` answers for each point (up to rounding at exactly
+    ``reach``), without a Python call per point. ``multi`` uses it to choose the
+    sub-step of a move (``World.act``'s ``near_wall``).
     """
     for r in robots:
         px, py = xy[r, 0], xy[r, 1]
