@@ -92,7 +92,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("eval", help="greedy evaluation of a Q-table")
     add_env_args(p)
-    p.add_argument("--qtable", default=DEFAULT_QTABLE, help="Q-table file")
+    p.add_argument(
+        "--qtable",
+        default=DEFAULT_QTABLE,
+        help="Q-table file (.qtable, or a policy exported for the robot)",
+    )
     p.add_argument("--episodes", type=int, default=100, help="episodes (default 100)")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
 
@@ -241,7 +245,8 @@ def _seed_table(init_path: str, qtable_path: str, env, say) -> None:
 
 
 def cmd_eval(args: argparse.Namespace) -> int:
-    from .qtable import check_compatible, load_qtable
+    from .export import load_any_table
+    from .qtable import check_compatible
     from .training import evaluate, sensor_signature
 
     _positive(args.episodes, "--episodes")
@@ -249,7 +254,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
     if goal_all:
         args.goal = None
     env = _make_env(args)
-    table = load_qtable(args.qtable)
+    table = load_any_table(args.qtable)
     check_compatible(table, env.layout, sensor_signature(env.config), args.qtable)
     goals = env.arena.goal_names() if goal_all else [None]
     results = [evaluate(env, table, args.episodes, args.seed, goal=g) for g in goals]
@@ -298,7 +303,8 @@ def cmd_check_arena(args: argparse.Namespace) -> int:
 
 def cmd_info(args: argparse.Namespace) -> int:
     from .config import load_config
-    from .qtable import PAPER_ORIGINAL_FIELDS, KeywordLayout, human_bytes, load_qtable
+    from .export import load_any_table
+    from .qtable import PAPER_ORIGINAL_FIELDS, KeywordLayout, human_bytes
     from .sensors import state_fields
 
     cfg = load_config(args.config)
@@ -316,7 +322,7 @@ def cmd_info(args: argparse.Namespace) -> int:
     print(f"Keyword ({now.total_bits} bits, Table 12):")
     print("  " + " | ".join(f"{n}<<{s}" for (n, _), s in zip(now.fields, now.shifts)) + " | Action")
     if args.qtable:
-        table = load_qtable(args.qtable)
+        table = load_any_table(args.qtable)
         share = table.entries / table.layout.n_entries
         print(
             f"Q-table {args.qtable}: {len(table):,} states visited, {table.entries:,} entries "

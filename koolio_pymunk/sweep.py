@@ -783,15 +783,9 @@ def print_summary(rows: dict[str, dict[str, str]], tasks: list[dict[str, Any]]) 
 
 
 def _rolling_goal_rate(log: Path, window: int) -> list[float]:
-    with open(log, newline="", encoding="utf-8") as fh:
-        hits = [r["outcome"] == "goal" for r in csv.DictReader(fh)]
-    out, acc = [], 0
-    for i, h in enumerate(hits):
-        acc += h
-        if i >= window:
-            acc -= hits[i - window]
-        out.append(acc / min(i + 1, window))
-    return out
+    from .plotting import outcome_rate, read_log
+
+    return outcome_rate(read_log(log).outcome, "goal", window).tolist()
 
 
 def _read_evals(path: Path) -> tuple[list[int], list[float]]:
