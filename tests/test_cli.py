@@ -193,3 +193,65 @@ def test_mismatched_table_is_refused_and_untouched(tmp_path) -> None:
 def test_every_command_has_help(command: str) -> None:
     p = cli(command, "--help")
     assert p.returncode == 0 and "usage:" in p.stdout
+
+
+def test_eval_reads_an_exported_policy(tmp_path) -> None:
+    cfg = tiny_config(tmp_path)
+    q, pol = tmp_path / "q.qtable", tmp_path / "policy.json"
+    assert (
+        main(
+            [
+                "train",
+                "--arena",
+                "room",
+                "--episodes",
+                "2",
+                "--qtable",
+                str(q),
+                "--log",
+                str(tmp_path / "l.csv"),
+                "--config",
+                str(cfg),
+                "--quiet",
+            ]
+        )
+        == 0
+    )
+    assert main(["export", "--qtable", str(q), "--out", str(pol)]) == 0
+    a = cli(
+        "eval",
+        "--arena",
+        "room",
+        "--qtable",
+        str(q),
+        "--episodes",
+        "2",
+        "--json",
+        "--config",
+        str(cfg),
+    )
+    b = cli(
+        "eval",
+        "--arena",
+        "room",
+        "--qtable",
+        str(pol),
+        "--episodes",
+        "2",
+        "--json",
+        "--config",
+        str(cfg),
+    )
+    assert a.returncode == b.returncode == 0
+    assert json.loads(a.stdout) == json.loads(b.stdout)
+
+
+def test_closed_output_pipe_is_not_an_error() -> None:
+    p = subprocess.run(
+        f"{sys.executable} -m koolio_pymunk.cli info | head -c 10",
+        shell=True,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert p.stdout == "State spac" and p.stderr == ""
