@@ -184,3 +184,24 @@ def test_core_does_not_import_pygame() -> None:
         [sys.executable, "-c", code], capture_output=True, text=True, check=True
     ).stdout.strip()
     assert out == "False False"
+
+
+def test_default_goal_is_a_real_delivery() -> None:
+    """>= 480 in (20 tiles) down the hallway and out of every camera's sight at the start."""
+    env = KoolioEnv("hallway", config=quiet_config())
+    start = env.world_arena.start.at
+    goal = env.world_arena.goal().at
+    assert goal[0] - start[0] >= 480
+    for heading in np.linspace(0, 2 * math.pi, 72, endpoint=False):
+        _, info = env.reset(seed=0, options={"heading": float(heading)})
+        assert info["goal_cam"] == [env.config.sensors.really_long_distance] * 3
+
+
+def test_tjpro_profile_is_17_cm() -> None:
+    cfg = quiet_config()
+    cfg.robot.profile = "tjpro"
+    env = KoolioEnv("room", config=cfg)
+    assert env.world.radius == pytest.approx(17 / 2.54 / 2)
+    env.reset(seed=0)
+    env.step(int(Action.FORWARD))
+    assert env.world.wall_clearance() > -0.1
