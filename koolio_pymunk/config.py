@@ -58,7 +58,8 @@ class ActionConfig:
     15, turning round costs twice as many steps and learning needs far more episodes."""
     move_action_distance: float = 12.0
     """``MoveActionDistance`` in inches per Forward / Reverse. Not given by the paper;
-    half a ceiling tile. Must not exceed the robot's diameter."""
+    half a ceiling tile. Must not exceed the robot's diameter (the ``tjpro`` profile,
+    6.7 in across, needs a shorter move, e.g. 6)."""
 
 
 @dataclass

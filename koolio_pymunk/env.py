@@ -104,6 +104,7 @@ class KoolioEnv(gym.Env):
         self.config = config if isinstance(config, Config) else load_config(config)
         if max_steps is not None:
             self.config.episode.max_steps = int(max_steps)
+        self.config.validate("config")
         radius = self.config.robot.radius
         self.arena = arena if isinstance(arena, Arena) else load_arena(arena, radius)
         if goal is not None and goal != "random":

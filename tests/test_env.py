@@ -200,6 +200,9 @@ def test_default_goal_is_a_real_delivery() -> None:
 def test_tjpro_profile_is_17_cm() -> None:
     cfg = quiet_config()
     cfg.robot.profile = "tjpro"
+    with pytest.raises(KoolioError, match="move_action_distance"):
+        KoolioEnv("room", config=cfg)  # 12 in is more than its 6.7 in diameter
+    cfg.actions.move_action_distance = 6.0
     env = KoolioEnv("room", config=cfg)
     assert env.world.radius == pytest.approx(17 / 2.54 / 2)
     env.reset(seed=0)
