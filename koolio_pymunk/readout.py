@@ -56,7 +56,9 @@ def _code(value: float, thresholds: np.ndarray) -> int:
 
 @numba.njit(cache=True)
 def compass_code(units: float) -> int:
-    """East 0, North 1, West 2, South 3 (same as ``sensors.compass_code``)."""
+    """The compass code of ``units`` (0..255): East 0, North 1, West 2, South 3, with
+    boundaries at NE / NW / SW / SE. The one implementation, compiled; Python code calls it
+    too (``sensors.compass_code``)."""
     deg = (units / 256.0 * 360.0) % 360.0
     return int(((deg + 45.0) % 360.0) // 90.0)
 

@@ -51,7 +51,7 @@ from .arena import Point
 from .config import SensorConfig
 from .errors import ConfigError
 from .raycast import make_engine, new_trig, sense_one
-from .readout import readout
+from .readout import compass_code, readout
 from .world import World
 
 #: Codes of the sonar intervals (Table 6) and camera intervals (Table 7).
@@ -397,16 +397,6 @@ def sonar_ray_offsets(angles_deg: Sequence[float], arc_deg: float, sub_arcs: int
     """
     centres = (np.arange(sub_arcs) + 0.5) / sub_arcs * arc_deg - arc_deg / 2.0
     return np.radians(np.asarray(angles_deg, dtype=float)[:, None] + centres[None, :])
-
-
-def compass_code(units: float) -> int:
-    """East 0, North 1, West 2, South 3; boundaries at NE/NW/SW/SE.
-
-    >>> [compass_code(u) for u in (0, 31.9, 32.1, 100, 150, 160, 224.1, 255)]
-    [0, 0, 1, 2, 2, 3, 0, 0]
-    """
-    deg = (units / 256.0 * 360.0) % 360.0
-    return int(((deg + 45.0) % 360.0) // 90.0)
 
 
 def state_fields(cfg: SensorConfig) -> list[tuple[str, int]]:

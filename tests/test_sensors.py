@@ -204,3 +204,5 @@ def test_default_state_fields_are_the_papers_twelve() -> None:
 
 def test_compass_code_boundaries() -> None:
     assert [compass_code(u) for u in (0, 31.9, 32.1, 96.1, 160.1, 224.1)] == [0, 0, 1, 2, 3, 0]
+    # 150 units = 210.9 deg (West); 160 units = 225 deg, exactly SW: South
+    assert [compass_code(u) for u in (100, 150, 160, 255)] == [2, 2, 3, 0]
