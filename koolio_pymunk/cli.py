@@ -34,13 +34,28 @@ def add_env_args(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--arena", default="hallway", help="arena file or built-in name (hallway, room, obstacles)"
     )
-    p.add_argument("--config", default=None, help="YAML configuration file (see config.py)")
+    p.add_argument(
+        "--config",
+        default=None,
+        help="YAML configuration file, or a shipped profile name (paper, ...; see config.py)",
+    )
+    add_world_arg(p)
     p.add_argument(
         "--goal",
         default=None,
         help="goal name (default: the arena's active goal); 'random': a random goal per episode",
     )
     p.add_argument("--seed", type=int, default=0, help="run seed (default 0)")
+
+
+def add_world_arg(p: argparse.ArgumentParser) -> None:
+    """``--world``: a world profile (realism models, sensor noise) over the configuration."""
+    p.add_argument(
+        "--world",
+        default=None,
+        help="world profile name (e.g. koolio-real) or file laid over the configuration: "
+        "realism models and sensor noise only (default: the ideal world)",
+    )
 
 
 def add_learning_files_args(p: argparse.ArgumentParser) -> None:
@@ -149,7 +164,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _make_env(args: argparse.Namespace):
     from .env import KoolioEnv
 
-    return KoolioEnv(arena=args.arena, config=args.config, goal=args.goal)
+    return KoolioEnv(arena=args.arena, config=args.config, goal=args.goal, world=args.world)
 
 
 def _positive(value: int, flag: str) -> None:
@@ -175,6 +190,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         "qtable",
         "log",
         "config",
+        "world",
         "robots",
         "init_qtable",
         "discard_unfinished",

@@ -13,10 +13,20 @@ A YAML configuration file holds any subset of the sections below, for example::
 
 Unknown sections or keys, wrong types and out-of-range values are refused with a
 one-line :class:`~koolio_pymunk.errors.ConfigError`.
+
+**Profiles.** A configuration may be named instead of given as a file: ``--config paper``
+reads the profile shipped in ``koolio_pymunk/profiles/paper.yaml`` (:func:`profile_names`
+lists them). A name that ends in ``.yaml``/``.yml`` or contains a path separator is a file.
+
+**Worlds.** ``--world NAME|FILE`` lays a *world* over the configuration: the sections that
+describe the world the robot meets rather than the robot's mind (:data:`WORLD_SECTIONS`:
+the realism models and the sensor noise). A world never changes the sensor layout, so a
+table learned in one world loads in another.
 """
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import difflib
 import itertools
@@ -236,33 +246,113 @@ class Config:
         return yaml.safe_dump(self.to_dict(), sort_keys=False, default_flow_style=None)
 
 
-def load_config(path: str | Path | None = None, overrides: dict | None = None) -> Config:
-    """Defaults, then the YAML file at ``path`` (if any), then ``overrides``; validated."""
+#: Shipped configuration profiles: ``<name>.yaml`` in this folder.
+PROFILE_DIR = Path(__file__).resolve().parent / "profiles"
+#: What a world (``--world``) may set: section -> the keys allowed in it (None: all).
+WORLD_SECTIONS: dict[str, tuple[str, ...] | None] = {"realism": None, "sensors": ("noise",)}
+
+
+def profile_names() -> list[str]:
+    """Names of the shipped profiles (``--config NAME`` or ``--world NAME``)."""
+    return sorted(p.stem for p in PROFILE_DIR.glob("*.yaml"))
+
+
+def config_path(name: str | Path) -> Path:
+    """The file of a profile name, or ``name`` itself when it looks like a path.
+
+    >>> config_path("paper").name, str(config_path("my.yaml"))
+    ('paper.yaml', 'my.yaml')
+    """
+    text = str(name)
+    if isinstance(name, Path) or text.lower().endswith((".yaml", ".yml")) or "/" in text:
+        return Path(name)
+    candidate = PROFILE_DIR / f"{text}.yaml"
+    if candidate.is_file():
+        return candidate
+    names = profile_names()
+    close = difflib.get_close_matches(text, names, n=1)
+    hint = f" (did you mean '{close[0]}'?)" if close else ""
+    raise ConfigError(
+        located(
+            text,
+            "",
+            f"no such profile{hint} (profiles: {', '.join(names)}; a file name ends in .yaml)",
+        )
+    )
+
+
+def read_config_file(path: str | Path) -> tuple[dict, str]:
+    """The mapping in a configuration file or profile, and the name to report it by."""
+    file = config_path(path)
+    source = str(path)
+    try:
+        text = file.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ConfigError(located(source, "", f"cannot read: {exc.strerror}")) from None
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f"line {mark.line + 1}" if mark else ""
+        raise ConfigError(located(source, where, "not valid YAML")) from None
+    return ({} if data is None else data), source
+
+
+def load_config(
+    path: str | Path | None = None,
+    overrides: dict | None = None,
+    world: str | Path | None = None,
+) -> Config:
+    """Defaults, then the file or profile ``path`` (if any), then ``overrides``, then the
+    world ``world`` (:func:`apply_world`); validated."""
     cfg = Config()
     source = "<defaults>"
     if path is not None:
-        source = str(path)
-        try:
-            text = Path(path).read_text(encoding="utf-8")
-        except OSError as exc:
-            raise ConfigError(located(source, "", f"cannot read: {exc.strerror}")) from None
-        try:
-            data = yaml.safe_load(text)
-        except yaml.YAMLError as exc:
-            mark = getattr(exc, "problem_mark", None)
-            where = f"line {mark.line + 1}" if mark else ""
-            raise ConfigError(located(source, where, "not valid YAML")) from None
-        if data is None:
-            data = {}
+        data, source = read_config_file(path)
         cfg = _merge(cfg, data, source, "")
     if overrides:
         cfg = _merge(cfg, overrides, source, "")
-    return cfg.validate(source)
+    cfg.validate(source)
+    return apply_world(cfg, world) if world is not None else cfg
+
+
+def apply_world(cfg: Config, world: str | Path) -> Config:
+    """A copy of ``cfg`` with the world file or profile ``world`` laid over it.
+
+    Only :data:`WORLD_SECTIONS` may appear in a world; anything else is refused, since it
+    would change the robot (its sensors' layout, its learner or rewards), not its world.
+    """
+    data, source = read_config_file(world)
+    if not isinstance(data, dict):
+        raise ConfigError(located(source, "(top level)", "must be a mapping"))
+    allowed = ", ".join(
+        k if keys is None else ", ".join(f"{k}.{x}" for x in keys)
+        for k, keys in WORLD_SECTIONS.items()
+    )
+    for key, value in data.items():
+        bad = _outside_world(str(key), value)
+        if bad is not None:
+            raise ConfigError(
+                located(source, bad, f"not a world setting (a world sets only: {allowed})")
+            )
+    return _merge(copy.deepcopy(cfg), data, source, "").validate(source)
 
 
 def config_from_dict(data: dict, source: str = "<config>") -> Config:
     """A validated Config from a nested mapping (e.g. ``Config().to_dict()``)."""
     return _merge(Config(), data, source, "").validate(source)
+
+
+def _outside_world(key: str, value: Any) -> str | None:
+    """The first item of a world's section ``key`` that is not a world setting, if any."""
+    if key not in WORLD_SECTIONS:
+        return key
+    keys = WORLD_SECTIONS[key]
+    if keys is None:
+        return None
+    if not isinstance(value, dict):
+        return key
+    return next((f"{key}.{k}" for k in value if k not in keys), None)
 
 
 # --- merging ------------------------------------------------------------------------

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import math
 from pathlib import Path
 from typing import Any
@@ -11,7 +12,7 @@ import numpy as np
 from gymnasium import spaces
 
 from .arena import Arena, Point, load_arena
-from .config import Config, load_config
+from .config import Config, apply_world, load_config
 from .errors import ConfigError
 from .geometry import EPS, point_in_polygon
 from .qtable import KeywordLayout
@@ -79,13 +80,19 @@ class KoolioEnv(gym.Env):
 
     **Rescue.** With ``rescue.auto_rescue_toggle`` on, a bumping robot past
     ``max_steps_before_rescue`` steps is rescued with probability ``rescue_chance``
-    (random reverses, random spin); the observation returned is the one after the rescue
-    and the step's reward stays the Bump reward. :meth:`rescue` forces one.
+    (random reverses, random spin) after the step's reward is found and its Q update made
+    (paper §5.4.8: the update bootstraps from the state the action led to); the
+    observation returned is the one after the rescue and the step's reward stays the Bump
+    reward. :meth:`rescue` forces one.
 
     **info**: ``pose`` (x, y, heading radians), ``sonar`` / ``goal_cam`` / ``eow_cam``
     (noised distances, inches), ``compass``, ``state_key``, ``keyword`` (Table 12 keyword
     of the previous state and this action: the Q entry the step updates), ``event``,
     ``rescued``, ``has_been_rescued``, ``reward_terms``, ``steps``, ``bumps``, ``goal``.
+
+    **World.** ``world`` (a profile name such as ``koolio-real``, or a file) lays the
+    realism models and sensor noise of a world over the configuration
+    (:func:`~koolio_pymunk.config.apply_world`); the default is the ideal world.
 
     All randomness (start headings, sensor noise, rescues) comes from ``self.np_random``,
     seeded by ``reset(seed=...)``.
@@ -100,8 +107,15 @@ class KoolioEnv(gym.Env):
         goal: str | None = None,
         render_mode: str | None = None,
         max_steps: int | None = None,
+        world: str | Path | None = None,
     ) -> None:
-        self.config = config if isinstance(config, Config) else load_config(config)
+        # A configuration passed in is copied, never changed (``max_steps``, ``world``).
+        cfg = copy.deepcopy(config) if isinstance(config, Config) else load_config(config)
+        if world is not None:
+            cfg = apply_world(cfg, world)
+        self.world_name = "ideal" if world is None else str(world)
+        """The world laid over the configuration (``--world``), or ``ideal``."""
+        self.config = cfg
         if max_steps is not None:
             self.config.episode.max_steps = int(max_steps)
         self.config.validate("config")
@@ -188,9 +202,13 @@ class KoolioEnv(gym.Env):
         return self.state_key
 
     def transition(self, action: int) -> tuple[int, float, bool, bool]:
-        """Simulate -> observe -> reward -> terminated -> truncated (then maybe rescue).
+        """Simulate -> observe -> reward -> terminated -> truncated, then maybe rescue.
 
-        Returns ``(state_key, reward, terminated, truncated)``.
+        Returns ``(next_key, reward, terminated, truncated)``. ``next_key`` is the state the
+        action led to, *before* any rescue: the paper applies the Q update first and then
+        checks for a rescue (§5.4.8), so the update bootstraps from ``next_key``.
+        :attr:`state_key` is the state after the rescue, where the next step starts (the
+        same as ``next_key`` when no rescue happened).
         """
         prev_key = self.state_key
         self.world.act((action,), self._distance, self._arc)
@@ -204,11 +222,12 @@ class KoolioEnv(gym.Env):
         self.last_action = action
         self.keyword = (prev_key << self.layout.action_bits) | action
         self.rescued = False
+        next_key = self.state_key
         if not j.terminated and wants_rescue(self.config.rescue, self.steps, bump, self.np_random):
             self._rescue()
         cap = self.config.episode.max_steps
         truncated = not j.terminated and cap > 0 and self.steps >= cap
-        return self.state_key, j.reward, j.terminated, truncated
+        return next_key, j.reward, j.terminated, truncated
 
     def rescue(self) -> tuple[np.ndarray, dict[str, Any]]:
         """Force ``Rescue_Robot`` now (the viewer's Rescue button)."""

@@ -47,6 +47,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "the policy as the robot's defaults (default: built-in defaults)",
     )
     p.add_argument(
+        "--world",
+        default=None,
+        help="the world (profile or file) the policy is meant for; recorded in the policy",
+    )
+    p.add_argument(
         "--episode",
         type=int,
         default=None,
@@ -63,8 +68,10 @@ def run(args: argparse.Namespace) -> int:
         atomic_write(out, table.to_bytes())
         print(f"wrote {out}: {len(table)} states, {table.meta.get('episodes', 0)} episodes")
         return 0
-    cfg = load_config(args.config)
+    cfg = load_config(args.config, world=args.world)
     doc = policy_document(table, cfg, episode=args.episode, source=args.qtable)
+    if args.world is not None:
+        doc["world"] = str(args.world)
     write_policy(doc, out)
     lay = doc["layout"]
     print(

@@ -15,8 +15,8 @@ cap). Their experience goes into one :class:`~koolio_pymunk.qtable.QTable`.
    :func:`readout.readout_batch`: robots x rays x walls; always the compiled kernel,
    which reads what the pymunk reference reads);
 4. **in robot index order**, each robot's step is judged (reward, end of episode),
-   rescued if auto rescue fires, and its Table 11 update applied to the shared table
-   (so robot ``r`` bootstraps from values robots ``< r`` updated in the same tick);
+   its Table 11 update applied to the shared table (so robot ``r`` bootstraps from values
+   robots ``< r`` updated in the same tick), then rescued if auto rescue fires;
    a finished episode is logged, and the robot starts a new one if the budget allows.
    :func:`qkernel.learn` does this compiled and hands each rescue draw and episode end
    to Python in that same order.
@@ -465,19 +465,20 @@ class _Run:
         return any_near_wall(self.xy, np.array(movers, np.int64), reach, self.fleet.walls)
 
     def _rescue_step(self, r: int, nxt: int) -> None:
-        """Robot ``r`` bumped past ``max_steps_before_rescue``: the rescue draw, maybe a
-        rescue (new reading), then its update and the step cap, as in ``KoolioEnv``."""
+        """Robot ``r`` bumped past ``max_steps_before_rescue``: its update (from the state
+        the action led to), then the rescue draw, maybe a rescue (new reading), and the
+        step cap, in the paper's order (§5.4.8) as in ``KoolioEnv``."""
         ep = self.eps[r]
         assert ep is not None
+        lc = self.cfg.learner
+        code = int(self.event[r])
+        update(*self.shared.args(), lc.alpha, lc.gamma, int(self.state[r]),
+               int(self.actions[r]), float(self.reward[code]), nxt, False)  # fmt: skip
         if ep.rng.random() < self.cfg.rescue.rescue_chance:
             rescue_robot(self.world, r, self.cfg.rescue, self.env._distance, ep.rng)
             self.xy[r] = self.world.pose(r)[:2]
             nxt = self.fleet.sense_one(r, ep.rng)[0]
             ep.rescued = True
-        lc = self.cfg.learner
-        code = int(self.event[r])
-        update(*self.shared.args(), lc.alpha, lc.gamma, int(self.state[r]),
-               int(self.actions[r]), float(self.reward[code]), nxt, False)  # fmt: skip
         self.state[r] = nxt
         cap = self.cfg.episode.max_steps
         if cap > 0 and self.steps[r] >= cap:

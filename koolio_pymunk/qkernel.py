@@ -231,8 +231,9 @@ def learn(
 
     ``reward`` holds the reward of each event code; ``rescue_after`` is
     ``max_steps_before_rescue`` (-1: auto rescue off); ``cap`` the step cap (0: none).
-    Returns ``(robot, reason)``: ``RESCUE_DRAW`` before the robot's update (Python draws,
-    maybe rescues, then updates), ``TERMINAL`` / ``TRUNCATED`` after it; ``(n, DONE)``.
+    Returns ``(robot, reason)``: ``RESCUE_DRAW`` before the robot's update (Python
+    updates, then draws and maybe rescues), ``TERMINAL`` / ``TRUNCATED`` after it;
+    ``(n, DONE)``.
     """
     discs, disc_radius, points, starts, boxes = zones
     for r in range(start, state.shape[0]):

@@ -19,11 +19,13 @@ local processes (``--workers N``) or as Ray tasks (``--ray [ADDRESS]``), and wri
     seeds: 3                   # a count (0, 1, 2) or a list of seeds
     arena: hallway             # built-in name or file (relative to the spec)
     goal: null                 # goal name, 'random', or null (the arena's active goal)
-    config: base.yaml          # optional configuration file (relative to the spec)
+    config: base.yaml          # optional configuration file (relative to the spec) or
+                               #  profile name (paper)
+    world: koolio-real         # optional world profile or file laid over every run
     base: {episode: {max_steps: 600}}      # configuration overrides for every run
     grid:                      # every combination of these (dotted config paths,
       learner.alpha: [0.1, 0.3]            #  or arena / goal)
-      learner.gamma: [0.9, 0.97]
+      learner.gamma: [0.9, 0.97]   #  (world: [null, koolio-real] compares worlds)
     runs:                      # and/or a list of named override sets (each combined
       - {name: soft-bumps, rewards.bump: -2}   #  with every grid combination)
     eval_every: 100            # greedy evaluation every K episodes (default episodes/10)
@@ -77,6 +79,7 @@ SPEC_KEYS = (
     "arena",
     "goal",
     "config",
+    "world",
     "base",
     "grid",
     "runs",
@@ -85,7 +88,7 @@ SPEC_KEYS = (
     "competence",
 )
 #: Parameters that are not configuration paths.
-RUN_KEYS = ("arena", "goal")
+RUN_KEYS = ("arena", "goal", "world")
 #: Result columns that depend on the machine's speed (left out of comparisons).
 TIMING_COLUMNS = ("competence_seconds", "train_seconds")
 RESULT_COLUMNS = (
@@ -132,12 +135,19 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="run on Ray: alone, a new local instance; 'auto' or ray://HOST:PORT, an "
         "existing cluster (needs pip install 'koolio-pymunk[ray]')",
     )
+    p.add_argument(
+        "--world",
+        default=None,
+        help="world profile or file laid over every run (overrides the spec's world)",
+    )
     p.add_argument("--no-plot", action="store_true", help="do not draw curves.png")
     p.add_argument("--dry-run", action="store_true", help="list the runs and exit")
 
 
 def run(args: argparse.Namespace) -> int:
     spec = load_spec(args.spec)
+    if args.world is not None:
+        spec.world = args.world
     out = Path(args.out) if args.out else Path("sweeps") / spec.name
     if args.workers is not None and args.workers < 1:
         raise KoolioError(f"--workers: must be >= 1, got {args.workers}")
@@ -168,6 +178,7 @@ class SweepSpec:
     arena: str
     goal: str | None
     config_path: str | None
+    world: str | None
     base: dict[str, Any]
     grid: dict[str, list[Any]]
     runs: list[dict[str, Any]]
@@ -231,7 +242,10 @@ def parse_spec(
         raise ConfigError(located(src, "base", "must be a mapping of configuration overrides"))
     config_path = data.get("config")
     if config_path is not None:
-        config_path = str(_relative(str(config_path), folder))
+        config_path = _config_ref(str(config_path), folder)
+    world = data.get("world")
+    if world is not None:
+        world = _config_ref(str(world), folder)
     arena = str(data.get("arena", "hallway"))
     goal = data.get("goal")
     name = str(data.get("name") or default_name)
@@ -245,6 +259,7 @@ def parse_spec(
         arena=_arena_ref(arena, folder),
         goal=None if goal is None else str(goal),
         config_path=config_path,
+        world=world,
         base=base,
         grid=grid,
         runs=runs,
@@ -277,6 +292,13 @@ def _seeds(value: Any, src: str) -> list[int]:
 def _relative(name: str, folder: Path) -> Path:
     p = Path(name)
     return p if p.is_absolute() or (folder / p) == p else folder / p
+
+
+def _config_ref(name: str, folder: Path) -> str:
+    """A profile name stays as is; a file name is taken relative to the spec's folder."""
+    if name.lower().endswith((".yaml", ".yml")) or "/" in name:
+        return str(_relative(name, folder))
+    return name
 
 
 def _arena_ref(arena: str, folder: Path) -> str:
@@ -339,9 +361,13 @@ def plan(spec: SweepSpec) -> list[dict[str, Any]]:
             arena = str(params.pop("arena", spec.arena))
             goal = params.pop("goal", spec.goal)
             goal = None if goal is None else str(goal)
+            world = spec.world
+            if "world" in params:  # a grid or runs value: relative to the spec, like arena
+                given = params.pop("world")
+                world = None if given is None else _config_ref(str(given), Path(spec.source).parent)
             overrides = _deep_merge(expand_dotted(spec.base), expand_dotted(params))
             try:
-                cfg = load_config(spec.config_path, overrides)
+                cfg = load_config(spec.config_path, overrides, world=world)
             except KoolioError as exc:
                 why = str(exc).removeprefix("<defaults>: ")
                 raise ConfigError(f"{spec.source}: {where}: {why}") from None
@@ -357,6 +383,7 @@ def plan(spec: SweepSpec) -> list[dict[str, Any]]:
             settings = {
                 "arena": arena,
                 "goal": goal,
+                "world": world,
                 "config": cfg.to_dict(),
                 "episodes": spec.episodes,
                 "eval_every": spec.eval_every,

@@ -102,9 +102,9 @@ def run_episode(
     while True:
         action = agent.act(state)
         nxt, reward, terminated, truncated = env.transition(action)
-        if learn:
+        if learn:  # paper §5.4.8: update, then the rescue check (done by the env)
             agent.update(state, action, reward, nxt, terminated)
-        state = nxt
+        state = env.state_key
         if terminated:
             return env.episode_reward, env.steps, env.judgement.event  # type: ignore[union-attr]
         if truncated:

@@ -150,7 +150,7 @@ def test_auto_rescue_fires_on_bump_past_limit() -> None:
     events = [env.step(int(Action.FORWARD))[4] for _ in range(3)]
     assert [i["rescued"] for i in events] == [False, False, True]
     assert events[2]["event"] == "bump" and events[2]["has_been_rescued"]
-    cfg.rescue.auto_rescue_toggle = False
+    env.config.rescue.auto_rescue_toggle = False  # the env's own copy of the configuration
     env.reset(seed=0)
     env.world.place(0, (400.0, 11.0), -math.pi / 2)
     assert not any(env.step(int(Action.FORWARD))[4]["rescued"] for _ in range(4))
@@ -208,3 +208,33 @@ def test_tjpro_profile_is_17_cm() -> None:
     env.reset(seed=0)
     env.step(int(Action.FORWARD))
     assert env.world.wall_clearance() > -0.1
+
+
+def test_q_update_bootstraps_from_the_state_before_the_rescue() -> None:
+    """Paper §5.4.8: update Q, then check for a rescue. ``transition`` returns the state
+    the action led to; the env then stands in the rescued state."""
+    envs = []
+    for toggle in (True, False):
+        cfg = Config()
+        cfg.rescue.max_steps_before_rescue = 0
+        cfg.rescue.rescue_chance = 1.0
+        cfg.rescue.auto_rescue_toggle = toggle
+        env = KoolioEnv("hallway", config=cfg)
+        env.reset(seed=3)
+        env.world.place(0, (400.0, 11.0), -math.pi / 2)  # touching the south wall
+        envs.append(env)
+    rescued, plain = envs
+    next_key, reward, _, _ = rescued.transition(int(Action.FORWARD))
+    plain_key, plain_reward, _, _ = plain.transition(int(Action.FORWARD))
+    assert rescued.rescued and not plain.rescued
+    assert (next_key, reward) == (plain_key, plain_reward)  # the same pre-rescue reading
+    assert rescued.world.pose(0) != plain.world.pose(0)  # ... but the robot was moved
+    assert plain.state_key == plain_key
+
+
+def test_config_passed_in_is_not_changed() -> None:
+    cfg = Config()
+    env = KoolioEnv("room", config=cfg, max_steps=10)
+    assert env.config.episode.max_steps == 10
+    assert cfg.episode.max_steps == Config().episode.max_steps
+    assert env.config is not cfg

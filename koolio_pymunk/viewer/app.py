@@ -177,7 +177,7 @@ def run(args: argparse.Namespace) -> int:
             )
         if args.paused:
             raise KoolioError("--paused: a headless window cannot be resumed")
-    env = KoolioEnv(arena=args.arena, config=args.config, goal=args.goal)
+    env = KoolioEnv(arena=args.arena, config=args.config, goal=args.goal, world=args.world)
     session = Session(
         env,
         args.qtable,

@@ -174,7 +174,7 @@ class Session:
             state = env.state_key
             action = act(state)
             nxt, reward, terminated, truncated = transition(action)
-            if learn:
+            if learn:  # from the state the action led to, before any rescue (§5.4.8)
                 update(state, action, reward, nxt, terminated)
             done += 1
             if terminated or truncated:
