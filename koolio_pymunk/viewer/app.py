@@ -540,7 +540,7 @@ class ViewerApp:
             f"arena: {self.env.arena.name}   seed: {s.seed}",
             f"world: {self.env.world_name}   config: {self.config_name}",
             "table: " + table,
-            "log: " + (str(s.log.path) if s.log.path else "none (greedy: nothing written)"),
+            "log: " + (str(s.log.path) if s.log.path else "none"),
         ]
 
     def _update_hint(self) -> None:

@@ -50,6 +50,8 @@ CURVE_GOAL: Color = (0, 150, 60)
 """Share of recent episodes that ended at the goal (right axis)."""
 CURVE_AXES: Color = (90, 90, 100)
 CURVE_GRID: Color = (228, 230, 236)
+CURVE_ZERO: Color = (200, 202, 210)
+"""The return-axis line at 0 (between the grid lines)."""
 CURVE_RUN_START: Color = (200, 120, 0)
 TAG_COLOURS: dict[str, Color] = {
     "AUTO-RESCUE": (40, 130, 70),
@@ -358,21 +360,22 @@ def draw_stats(
 
 # -- the live learning curve -------------------------------------------------------------------
 def nice_ticks(lo: float, hi: float, most: int = 6) -> list[float]:
-    """Round tick values (1, 2, 5 x 10^k apart) inside ``[lo, hi]``, at most ``most``.
+    """Round tick values (1, 2, 2.5 or 5 x 10^k apart) inside ``[lo, hi]``: the closest
+    spacing that gives at most ``most`` of them.
 
     >>> nice_ticks(-2282, 182)
     [-2000.0, -1500.0, -1000.0, -500.0, 0.0]
-    >>> nice_ticks(1, 1501, 5)
-    [500.0, 1000.0, 1500.0]
+    >>> nice_ticks(1, 1501, 6)
+    [250.0, 500.0, 750.0, 1000.0, 1250.0, 1500.0]
     """
     if not (math.isfinite(lo) and math.isfinite(hi)) or hi <= lo:
         return [lo] if math.isfinite(lo) else []
-    raw = (hi - lo) / max(1, most - 1)
-    mag = 10.0 ** math.floor(math.log10(raw))
-    step = next(m * mag for m in (1.0, 2.0, 2.5, 5.0, 10.0) if m * mag >= raw)
-    first = math.ceil(lo / step - 1e-9)
-    out = [(first + i) * step for i in range(most + 2)]
-    return [float(v) for v in out if v <= hi + 1e-9 * step][:most]
+    mag = 10.0 ** math.floor(math.log10((hi - lo) / max(1, most)))
+    for step in (m * mag for m in (1.0, 2.0, 2.5, 5.0, 10.0, 20.0, 25.0, 50.0)):
+        first, last = math.ceil(lo / step - 1e-9), math.floor(hi / step + 1e-9)
+        if last - first + 1 <= most:
+            return [float(k * step) for k in range(first, last + 1)]
+    return [lo, hi]
 
 
 def robust_range(values: Sequence[float], keep: Sequence[float]) -> tuple[float, float, int]:
@@ -448,7 +451,8 @@ def draw_curve(
         avg = moving_average(returns, window)
         lo, hi, outside = robust_range(returns, avg)
         ax = _Axes(plot, n, lo, hi)
-        _grid(surface, ax, st)
+        out["y_ticks"] = _grid(surface, ax, st)
+        out["y_range"], out["off_scale"], out["y_of"] = (lo, hi), outside, ax.y
         _returns_band(surface, ax, np.asarray(returns, dtype=float))
         _polyline(surface, ax, avg, CURVE_AVERAGE, max(2, st.px(3)))
         if len(at_goal) == n:
@@ -461,26 +465,32 @@ def draw_curve(
             note = text(f"{outside} off scale (lowest {worst:,.0f})", st.small, DIM)
             surface.blit(note, (plot.right - note.get_width() - 4, plot.bottom - note.get_height()))
     pygame.draw.rect(surface, CURVE_AXES, plot, width=1)
-    _axis_labels(surface, ax, st, n, bool(len(at_goal) == n and n))
+    out["x_ticks"] = _axis_labels(surface, ax, st, n, bool(len(at_goal) == n and n))
     _legend(surface, plot, st, window)
     surface.set_clip(clip)
     return out
 
 
-def _grid(surface: pygame.Surface, ax: _Axes, st: Style) -> None:
-    for v in nice_ticks(ax.lo, ax.hi, 6):
+def _grid(surface: pygame.Surface, ax: _Axes, st: Style) -> list[float]:
+    """Return-axis ticks: labels on the left, light grid lines across; returns the ticks."""
+    ticks = nice_ticks(ax.lo, ax.hi, max(3, ax.plot.h // (2 * st.row_h) + 1))
+    for v in ticks:
         yy = ax.y(v)
         pygame.draw.line(surface, CURVE_GRID, (ax.plot.x, yy), (ax.plot.right - 1, yy))
         lab = text(f"{v:,.0f}", st.small, DIM)
         surface.blit(lab, (ax.plot.x - lab.get_width() - st.px(4), yy - lab.get_height() // 2))
     if ax.lo < 0 < ax.hi:
         yy = ax.y(0.0)
-        pygame.draw.line(surface, (200, 202, 210), (ax.plot.x, yy), (ax.plot.right - 1, yy))
+        pygame.draw.line(surface, CURVE_ZERO, (ax.plot.x, yy), (ax.plot.right - 1, yy))
+    return ticks
 
 
-def _axis_labels(surface: pygame.Surface, ax: _Axes, st: Style, n: int, goal: bool) -> None:
+def _axis_labels(surface: pygame.Surface, ax: _Axes, st: Style, n: int, goal: bool) -> list[float]:
+    """Episode ticks under the plot, goal-rate ticks (0, 50, 100 %) on the right; returns
+    the episode ticks."""
     plot = ax.plot
-    for e in nice_ticks(1, max(1, n), 7) if n > 1 else []:
+    ticks = nice_ticks(1, max(1, n), max(2, ax.plot.w // st.px(56))) if n > 1 else []
+    for e in ticks:
         xx = ax.x(e - 1)
         pygame.draw.line(surface, CURVE_AXES, (xx, plot.bottom), (xx, plot.bottom + st.px(3)))
         lab = text(f"{e:,.0f}", st.small, DIM)
@@ -493,6 +503,7 @@ def _axis_labels(surface: pygame.Surface, ax: _Axes, st: Style, n: int, goal: bo
             surface.blit(lab, (plot.right + st.px(5), yy - lab.get_height() // 2))
     cap = text("episode", st.small, DIM)
     surface.blit(cap, (plot.x - cap.get_width() - st.px(4), plot.bottom + st.px(3)))
+    return ticks
 
 
 def _legend(surface: pygame.Surface, plot: pygame.Rect, st: Style, window: int) -> None:
