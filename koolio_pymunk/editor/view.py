@@ -150,8 +150,9 @@ def draw_lengths(
     surface: pygame.Surface, cam: Camera, arena: Arena, tile: float
 ) -> list[pygame.Rect]:
     """Each wall and obstacle edge's length beside its middle, on the edge's outer side
-    (outside the walls, outside an obstacle), so it covers no goal or marker; edges
-    shorter than 80 pixels get none. Returns the labels' rectangles."""
+    (outside the walls, outside an obstacle) so that it covers no goal or marker, or on
+    the inner side where the outer one is off the canvas; edges shorter than 80 pixels
+    get none. Returns the labels' rectangles."""
     out = []
     for poly_path in items.polygon_paths(arena)[: 1 + len(arena.obstacles)]:
         poly = items.get_polygon(arena, poly_path)
@@ -169,7 +170,10 @@ def draw_lengths(
                 label += f" ({round(tiles)} t)"
             img = draw.font(SMALL).render(label, True, LENGTH_TEXT)
             box = img.get_rect().inflate(4, 0)
-            box.center = _beside(sa, sb, box, ccw if n >= 3 else None)
+            side = ccw if n >= 3 else None
+            box.center = _beside(sa, sb, box, side)
+            if side is not None and not pygame.Rect(cam.viewport).contains(box):
+                box.center = _beside(sa, sb, box, not side)  # off the canvas: inside
             pygame.draw.rect(surface, LENGTH_BG, box)
             surface.blit(img, img.get_rect(center=box.center))
             out.append(box)

@@ -378,6 +378,18 @@ def nice_ticks(lo: float, hi: float, most: int = 6) -> list[float]:
     return [lo, hi]
 
 
+def tick_label(v: float, ticks: Sequence[float]) -> str:
+    """``v`` with as many decimals as the tick spacing needs, thousands separated.
+
+    >>> tick_label(-1500.0, [-1500.0, -1000.0]), tick_label(45.0, [45.0, 45.5, 46.0])
+    ('-1,500', '45.0')
+    >>> tick_label(2.5, [0.0, 2.5, 5.0])
+    '2.5'
+    """
+    decimals = next((d for d in range(4) if all(abs(round(t, d) - t) < 1e-9 for t in ticks)), 3)
+    return f"{v:,.{decimals}f}"
+
+
 def robust_range(values: Sequence[float], keep: Sequence[float]) -> tuple[float, float, int]:
     """y range for the return axis: everything in ``keep`` (the moving average) and the
     1st..99.5th percentile of ``values``, padded; and how many values fall outside it.
@@ -477,7 +489,7 @@ def _grid(surface: pygame.Surface, ax: _Axes, st: Style) -> list[float]:
     for v in ticks:
         yy = ax.y(v)
         pygame.draw.line(surface, CURVE_GRID, (ax.plot.x, yy), (ax.plot.right - 1, yy))
-        lab = text(f"{v:,.0f}", st.small, DIM)
+        lab = text(tick_label(v, ticks), st.small, DIM)
         surface.blit(lab, (ax.plot.x - lab.get_width() - st.px(4), yy - lab.get_height() // 2))
     if ax.lo < 0 < ax.hi:
         yy = ax.y(0.0)
