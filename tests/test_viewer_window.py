@@ -214,7 +214,7 @@ def test_panel_names_the_table_world_and_configuration(tmp_path, config) -> None
     session = Session(env, q, seed=1, greedy=True)
     app = ViewerApp(session, config_name="cfg.yaml")
     lines = app.info_lines()
-    assert lines[0] == "mode: greedy (table read-only)"
+    assert lines[0] == "mode: greedy (read-only table)"
     assert lines[2] == "world: ideal   config: cfg.yaml"
     assert lines[3] == f"table: {q}"
     assert lines[4] == "log: none"

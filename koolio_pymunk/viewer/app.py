@@ -485,6 +485,7 @@ class ViewerApp:
             "#title": {"font": {**font, "size": str(st.px(16)), "bold": "1"}},
             "#centre": {"misc": {"text_horiz_alignment": "center"}},
             "#hint": {"font": {**font, "size": str(st.px(13))}, "colours": {"normal_text": HINT}},
+            "#info": {"font": {**font, "size": str(st.px(13))}},
         }
 
     def _panel_mouse_position(self) -> tuple[int, int]:
@@ -536,7 +537,7 @@ class ViewerApp:
         s = self.session
         table = str(s.table_path)
         return [
-            "mode: " + ("learning" if s.learn else "greedy (table read-only)"),
+            "mode: " + ("learning" if s.learn else "greedy (read-only table)"),
             f"arena: {self.env.arena.name}   seed: {s.seed}",
             f"world: {self.env.world_name}   config: {self.config_name}",
             "table: " + table,
@@ -1141,17 +1142,17 @@ class _ControlsBuilder:
         self.y += st.px(6)
         h = app.panel.rect.h
         for line in app.info_lines():
-            if self.y + st.px(20) > h - 4:
+            if self.y + st.px(19) > h - 4:
                 break
             text = _short_to(line, self.w, app.style)
-            self.label(text, 20, 0)
+            self.label(text, 19, 0, "#info")
 
 
 def _short_to(line: str, width: int, st: Any) -> str:
     """``line`` shortened in its middle with ``...`` to fit ``width`` pixels."""
     from . import hud
 
-    f = hud.font(st.px(14))
+    f = hud.font(st.px(13))
     if f.size(line)[0] <= width:
         return line
     head, _, tail = line.partition(": ")
