@@ -5,11 +5,13 @@
 :mod:`koolio_pymunk.viewer.session`), or, with ``--greedy``, follows a learned policy
 without changing the table.
 
-Layout (default 1280 x 800): for a long arena an overview of the whole arena across the
-top (click it to look there); below it the arena view (mouse wheel zooms, drag pans,
-Follow keeps the robot in view); below that the HUD, Stats and live learning-curve
-panels; on the right the control panel (pygame-gui buttons, check boxes and a slider).
-Every control has a keyboard shortcut (F1 shows them).
+Layout (default 1280 x 800; text and controls scale with the window): for a long arena
+an overview of the whole arena across the top (click it to look there); below it the
+arena view (mouse wheel zooms, drag pans, Follow keeps the robot in view); below that
+the HUD, Stats and live learning-curve panels; on the right the control panel (pygame-gui
+buttons, check boxes and a slider), or, with ``--panel-window`` or key P, the same panel
+in a window of its own (the paper's future-work floating control panel). Every control
+has a keyboard shortcut (F1 shows them).
 
 Pacing: with the clock, steps run at the slider's rate (steps per second). Clockless
 runs ``episode.clockless_loop_count`` steps per tick back to back and redraws at most

@@ -55,25 +55,8 @@ def draw_env(
     camera's viewport. With ``show_sensors`` the robot has the paper's state colour (and
     ``lines=False`` leaves the sensor lines out, for a small overview); without it the
     robot is the paper's plain red. With a ``layer`` the arena comes from its cache."""
-    radius = env.config.robot.radius
-    if layer is not None:
-        layer.draw(
-            surface,
-            env.world_arena,
-            camera,
-            labels=labels,
-            robot_radius=radius,
-            label_size=label_size,
-        )
-    else:
-        draw_arena(
-            surface,
-            env.world_arena,
-            camera,
-            labels=labels,
-            robot_radius=radius,
-            label_size=label_size,
-        )
+    kw = {"labels": labels, "robot_radius": env.config.robot.radius, "label_size": label_size}
+    (layer.draw if layer is not None else draw_arena)(surface, env.world_arena, camera, **kw)
     clip = surface.get_clip()
     surface.set_clip(pygame.Rect(camera.viewport))
     pose = env.world.pose(0)
