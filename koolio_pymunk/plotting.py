@@ -134,6 +134,11 @@ def outcome_rate(outcomes: list[str], name: str, window: int) -> np.ndarray:
     return moving_average(np.array([o == name for o in outcomes], dtype=float), window)
 
 
+def _count(n: int, word: str) -> str:
+    """``1 episode``, ``50 episodes``."""
+    return f"{n} {word}" + ("" if n == 1 else "s")
+
+
 def run_labels(logs: list[Log]) -> list[str]:
     """A short name per log: the file name, with as many parent folders as it takes to
     tell the logs apart.
@@ -215,7 +220,7 @@ def _title(logs: list[Log], names: list[str]) -> str:
         return "Learning curves: " + ", ".join(names)
     first = logs[0]
     extra = f", {first.skipped} interrupted rows left out" if first.skipped else ""
-    return f"Learning curve: {first.path.name} ({len(first)} episodes{extra})"
+    return f"Learning curve: {first.path.name} ({_count(len(first), 'episode')}{extra})"
 
 
 def _plot_single(axes, log: Log, window: int) -> dict:
@@ -228,7 +233,7 @@ def _plot_single(axes, log: Log, window: int) -> dict:
         moving_average(log.reward, window),
         color="tab:blue",
         lw=2.2,
-        label=f"moving average ({window} episodes)",
+        label=f"moving average ({_count(window, 'episode')})",
     )
     for key, text, c in OUTCOMES:
         ax_out.plot(x, 100.0 * outcome_rate(log.outcome, key, window), color=c, lw=2, label=text)
@@ -268,12 +273,14 @@ def _plot_several(axes, logs: list[Log], names: list[str], window: int, colours)
         ax_steps.plot(x, moving_average(log.steps, window), color=colour, lw=2.2, label=name)
         bumps.plot(x, moving_average(log.bumps, window), color=colour, lw=1.4, ls="--")
     bumps.set_ylim(bottom=0)
-    ax_ret.set_title(f"moving average of the return ({window} episodes)", fontsize=9, loc="right")
+    ax_ret.set_title(
+        f"moving average of the return ({_count(window, 'episode')})", fontsize=9, loc="right"
+    )
     ax_out.set_ylabel(f"episodes at the goal\n(% of last {window})")
     ax_out.set_title("share at the goal", fontsize=9, loc="right")
     ax_steps.set_ylabel("steps per episode\n(solid)")
     ax_steps.set_title(
-        f"steps (solid) and bumps (dashed), moving averages ({window} episodes)",
+        f"steps (solid) and bumps (dashed), moving averages ({_count(window, 'episode')})",
         fontsize=9,
         loc="right",
     )
@@ -319,5 +326,5 @@ def run(args: argparse.Namespace) -> int:
     logs = [read_log(p) for p in paths]
     out = plot_logs(logs, args.out, args.window, args.title)
     n = sum(len(log) for log in logs)
-    print(f"plot: {n} episodes from {len(logs)} log(s) -> {out}")
+    print(f"plot: {_count(n, 'episode')} from {len(logs)} log(s) -> {out}")
     return 0
