@@ -8,11 +8,13 @@ and draws, against the episode number:
    "graph ... showing the growth of the return as the policy approaches optimal";
 2. the share of the last ``--window`` episodes that ended at the goal, off the end of the
    world, or at the step cap, with epsilon on a second axis;
-3. steps per episode and its moving average, with the moving average of bumps.
+3. steps per episode and its moving average, with the moving average of bumps on a
+   right axis (dashed).
 
 ``interrupted`` rows (an Exit folded into the table) are left out: that episode is run
-again from its start when training resumes. Several ``--log`` files are overlaid
-(moving averages only) to compare runs.
+again from its start when training resumes. Several logs (``--log a --log b``, or
+``koolio-pm plot a.csv b.csv``) are overlaid to compare runs, one colour each: moving
+averages only, and of the outcomes only the share at the goal.
 
 matplotlib (Agg backend, no display) is imported only when the command runs.
 """
@@ -132,86 +134,36 @@ def outcome_rate(outcomes: list[str], name: str, window: int) -> np.ndarray:
     return moving_average(np.array([o == name for o in outcomes], dtype=float), window)
 
 
+def _count(n: int, word: str) -> str:
+    """``1 episode``, ``50 episodes``."""
+    return f"{n} {word}" + ("" if n == 1 else "s")
+
+
+def run_labels(logs: list[Log]) -> list[str]:
+    """A short name per log: the file name, with as many parent folders as it takes to
+    tell the logs apart.
+
+    >>> from pathlib import Path
+    >>> def log(p):
+    ...     return Log(Path(p), *([np.zeros(0)] * 4), [], np.zeros(0))
+    >>> run_labels([log("runs/a/train.csv"), log("runs/b/train.csv")])
+    ['a/train.csv', 'b/train.csv']
+    >>> run_labels([log("x/one.csv"), log("x/two.csv")])
+    ['one.csv', 'two.csv']
+    """
+    parts = [log.path.parts for log in logs]
+    for k in range(1, max((len(p) for p in parts), default=1) + 1):
+        names = ["/".join(p[-k:]) for p in parts]
+        if len(set(names)) == len(names):
+            return names
+    return [str(log.path) for log in logs]
+
+
 def plot_logs(logs: list[Log], out: str | Path, window: int = 50, title: str | None = None) -> Path:
     """Draw the learning curve of ``logs`` into the PNG ``out`` (written atomically)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from matplotlib.ticker import MaxNLocator
 
-    single = len(logs) == 1
-    fig, axes = plt.subplots(3, 1, figsize=(10, 8.5), sharex=True, constrained_layout=True)
-    ax_ret, ax_out, ax_steps = axes
-    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    for i, log in enumerate(logs):
-        x = log.episode + 1
-        name = log.path.name
-        colour = "tab:blue" if single else colours[i % len(colours)]
-        if single:
-            ax_ret.plot(x, log.reward, color="tab:blue", alpha=0.3, lw=0.8, label="return")
-        label = f"moving average ({window} episodes)" if single else f"{name}: return"
-        ax_ret.plot(x, moving_average(log.reward, window), color=colour, lw=2.2, label=label)
-        for key, text, c in OUTCOMES if single else OUTCOMES[:1]:
-            rate = 100.0 * outcome_rate(log.outcome, key, window)
-            ax_out.plot(
-                x, rate, color=c if single else colour, lw=2, label=text if single else name
-            )
-        if single:
-            ax_steps.plot(x, log.steps, color="tab:orange", alpha=0.3, lw=0.8, label="steps")
-        ax_steps.plot(
-            x,
-            moving_average(log.steps, window),
-            color="tab:orange" if single else colour,
-            lw=2.2,
-            label="steps, moving average" if single else f"{name}: steps",
-        )
-        if single:
-            ax_steps.plot(
-                x,
-                moving_average(log.bumps, window),
-                color="tab:red",
-                lw=1.6,
-                label="bumps, moving average",
-            )
-    handles_extra: list = []
-    if single:
-        eps = ax_out.twinx()
-        x0, e0 = logs[0].episode + 1, logs[0].epsilon
-        (line,) = eps.plot(x0, e0, color="black", ls=":", lw=1.4, label="epsilon (right axis)")
-        handles_extra.append(line)
-        eps.set_ylabel("epsilon (dotted)")
-        eps.set_ylim(0, max(0.05, float(logs[0].epsilon.max()) * 1.1))
-    ax_ret.set_ylabel("return per episode\n(sum of rewards)")
-    ax_out.set_ylabel(f"share of episodes\n(% of last {window})")
-    ax_out.set_ylim(-2, 102)
-    ax_steps.set_ylabel("steps and bumps\nper episode")
-    ax_steps.set_xlabel("episode")
-    ax_steps.xaxis.set_major_locator(MaxNLocator(integer=True))
-    for ax in axes:
-        ax.grid(True, alpha=0.3)
-        handles, _ = ax.get_legend_handles_labels()
-        if ax is ax_out:
-            handles += handles_extra
-        # One row of legend above each panel: it never hides the data.
-        ax.legend(
-            handles=handles,
-            loc="lower left",
-            bbox_to_anchor=(0.0, 1.0),
-            ncol=4,
-            fontsize=9,
-            frameon=False,
-            borderaxespad=0.2,
-        )
-    if title is None:
-        first = logs[0]
-        extra = f", {first.skipped} interrupted rows left out" if first.skipped else ""
-        title = (
-            f"Learning curve: {first.path.name} ({len(first)} episodes{extra})"
-            if single
-            else "Learning curves: " + ", ".join(log.path.name for log in logs)
-        )
-    fig.suptitle(title)
+    fig = make_figure(logs, window, title)
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110)
     plt.close(fig)
@@ -221,7 +173,134 @@ def plot_logs(logs: list[Log], out: str | Path, window: int = 50, title: str | N
     return out
 
 
+def make_figure(logs: list[Log], window: int = 50, title: str | None = None):
+    """The learning-curve figure of ``logs`` (matplotlib, Agg), three panels.
+
+    One log: return and its moving average; the shares of the last ``window`` episodes at
+    the goal, off the end of the world and at the step cap, with epsilon; steps and bumps
+    per episode. Several logs: the same panels with one colour per run, moving averages
+    only, and only the share at the goal (the panel says so)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.ticker import MaxNLocator
+
+    fig, axes = plt.subplots(3, 1, figsize=(10, 8.5), sharex=True, constrained_layout=True)
+    ax_ret, ax_out, ax_steps = axes
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    names = run_labels(logs)
+    if len(logs) == 1:
+        extra = _plot_single(axes, logs[0], window)
+    else:
+        extra = _plot_several(axes, logs, names, window, colours)
+    ax_ret.set_ylabel("return per episode\n(sum of rewards)")
+    ax_out.set_ylim(-2, 102)
+    ax_steps.set_xlabel("episode")
+    ax_steps.xaxis.set_major_locator(MaxNLocator(integer=True))
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+        handles, _ = ax.get_legend_handles_labels()
+        # One row of legend above each panel: it never hides the data.
+        ax.legend(
+            handles=handles + extra.get(ax, []),
+            loc="lower left",
+            bbox_to_anchor=(0.0, 1.0),
+            ncol=4,
+            fontsize=9,
+            frameon=False,
+            borderaxespad=0.2,
+        )
+    fig.suptitle(title or _title(logs, names))
+    return fig
+
+
+def _title(logs: list[Log], names: list[str]) -> str:
+    if len(logs) > 1:
+        return "Learning curves: " + ", ".join(names)
+    first = logs[0]
+    extra = f", {first.skipped} interrupted rows left out" if first.skipped else ""
+    return f"Learning curve: {first.path.name} ({_count(len(first), 'episode')}{extra})"
+
+
+def _plot_single(axes, log: Log, window: int) -> dict:
+    """One run: every panel in full. Returns extra legend handles per axis."""
+    ax_ret, ax_out, ax_steps = axes
+    x = log.episode + 1
+    ax_ret.plot(x, log.reward, color="tab:blue", alpha=0.3, lw=0.8, label="return")
+    ax_ret.plot(
+        x,
+        moving_average(log.reward, window),
+        color="tab:blue",
+        lw=2.2,
+        label=f"moving average ({_count(window, 'episode')})",
+    )
+    for key, text, c in OUTCOMES:
+        ax_out.plot(x, 100.0 * outcome_rate(log.outcome, key, window), color=c, lw=2, label=text)
+    ax_out.set_ylabel(f"share of episodes\n(% of last {window})")
+    eps = ax_out.twinx()
+    (line,) = eps.plot(x, log.epsilon, color="black", ls=":", lw=1.4, label="epsilon (right axis)")
+    eps.set_ylabel("epsilon (dotted)")
+    eps.set_ylim(0, max(0.05, float(log.epsilon.max()) * 1.1))
+    ax_steps.plot(x, log.steps, color="tab:orange", alpha=0.3, lw=0.8, label="steps")
+    ax_steps.plot(
+        x, moving_average(log.steps, window), color="tab:orange", lw=2.2, label="steps, average"
+    )
+    ax_steps.set_ylabel("steps per episode")
+    bumps = _bumps_axis(ax_steps, "tab:red")
+    (b,) = bumps.plot(
+        x,
+        moving_average(log.bumps, window),
+        color="tab:red",
+        lw=1.6,
+        ls="--",
+        label="bumps, average (right axis)",
+    )
+    bumps.set_ylim(bottom=0)
+    return {ax_out: [line], ax_steps: [b]}
+
+
+def _plot_several(axes, logs: list[Log], names: list[str], window: int, colours) -> dict:
+    """Several runs, one colour each: moving averages of the return, the share at the
+    goal, steps (solid) and bumps (dashed, right axis)."""
+    ax_ret, ax_out, ax_steps = axes
+    bumps = _bumps_axis(ax_steps)
+    for i, (log, name) in enumerate(zip(logs, names)):
+        x, colour = log.episode + 1, colours[i % len(colours)]
+        ax_ret.plot(x, moving_average(log.reward, window), color=colour, lw=2.2, label=name)
+        rate = 100.0 * outcome_rate(log.outcome, "goal", window)
+        ax_out.plot(x, rate, color=colour, lw=2, label=name)
+        ax_steps.plot(x, moving_average(log.steps, window), color=colour, lw=2.2, label=name)
+        bumps.plot(x, moving_average(log.bumps, window), color=colour, lw=1.4, ls="--")
+    bumps.set_ylim(bottom=0)
+    ax_ret.set_title(
+        f"moving average of the return ({_count(window, 'episode')})", fontsize=9, loc="right"
+    )
+    ax_out.set_ylabel(f"episodes at the goal\n(% of last {window})")
+    ax_out.set_title("share at the goal", fontsize=9, loc="right")
+    ax_steps.set_ylabel("steps per episode\n(solid)")
+    ax_steps.set_title(
+        f"steps (solid) and bumps (dashed), moving averages ({_count(window, 'episode')})",
+        fontsize=9,
+        loc="right",
+    )
+    return {}
+
+
+def _bumps_axis(ax_steps, colour: str = "black"):
+    """Bumps on a right axis of the steps panel (they are 10 to 100 times fewer)."""
+    bumps = ax_steps.twinx()
+    bumps.set_ylabel("bumps per episode\n(dashed)", color=colour)
+    return bumps
+
+
 def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "logs",
+        nargs="*",
+        metavar="LOG",
+        help="training log CSV files (the same as --log LOG)",
+    )
     p.add_argument(
         "--log",
         action="append",
@@ -243,8 +322,9 @@ def run(args: argparse.Namespace) -> int:
         raise KoolioError(f"--window: must be >= 1, got {args.window}")
     if not str(args.out).lower().endswith(".png"):
         raise KoolioError(f"--out: {args.out}: must end in .png")
-    logs = [read_log(p) for p in (args.log or [DEFAULT_LOG])]
+    paths = [*args.logs, *(args.log or [])] or [DEFAULT_LOG]
+    logs = [read_log(p) for p in paths]
     out = plot_logs(logs, args.out, args.window, args.title)
     n = sum(len(log) for log in logs)
-    print(f"plot: {n} episodes from {len(logs)} log(s) -> {out}")
+    print(f"plot: {_count(n, 'episode')} from {len(logs)} log(s) -> {out}")
     return 0

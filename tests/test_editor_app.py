@@ -202,7 +202,7 @@ def test_saving_an_invalid_arena_asks_first(tmp_path: Path) -> None:
     assert app.prompt is not None and app.prompt.kind == "confirm"
     assert app.prompt.label == (
         f"INVALID: {path}: goals[0].at: point (102, 200) is outside the walls (or on them) "
-        f"-- write {path} anyway (the valid file is kept as .bak)? [y/n]"
+        f"-- write {path} anyway (the valid file is kept as .bak)?"
     )
     run_lines(app, "key n\n")
     assert app.prompt is None and path.read_bytes() == good and app.message == "cancelled"
@@ -296,7 +296,7 @@ def test_quit_asks_when_there_are_unsaved_changes(tmp_path: Path) -> None:
     assert not app.running
     app = app_for(copy_room(tmp_path))
     run_lines(app, "name other\nkey ctrl+q\n")
-    assert app.running and app.prompt.label == "Unsaved changes: quit anyway? [y/n]"
+    assert app.running and app.prompt.label == "Unsaved changes: quit anyway?"
     run_lines(app, "key y\n")
     assert not app.running
 

@@ -95,3 +95,59 @@ def test_plot_cli_errors_exit_2(tmp_path, capsys) -> None:
     write_log(log, 5)
     assert main(["plot", "--log", str(log), "--out", str(tmp_path / "c.jpg")]) == 2
     assert main(["plot", "--log", str(log), "--out", str(tmp_path / "c.png"), "--window", "0"]) == 2
+
+
+def test_several_logs_say_what_each_panel_shows(tmp_path) -> None:
+    """Two runs: the middle panel says it is the share at the goal, the bottom panel draws
+    bumps (dashed, right axis) as well as steps, one colour per run, named by folder."""
+    import matplotlib.pyplot as plt
+
+    from koolio_pymunk.plotting import make_figure
+
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    write_log(tmp_path / "a" / "train.csv", 30)
+    write_log(tmp_path / "b" / "train.csv", 40)
+    logs = [read_log(tmp_path / d / "train.csv") for d in ("a", "b")]
+    fig = make_figure(logs, 10)
+    _, ax_out, ax_steps, bumps = fig.axes
+    assert "at the goal" in ax_out.get_ylabel() and ax_out.get_title(loc="right")
+    assert [t.get_text() for t in ax_out.get_legend().get_texts()] == [
+        "a/train.csv",
+        "b/train.csv",
+    ]
+    assert "steps (solid) and bumps (dashed)" in ax_steps.get_title(loc="right")
+    assert "bumps" in bumps.get_ylabel()
+    steps_lines, bump_lines = ax_steps.get_lines(), bumps.get_lines()
+    assert len(steps_lines) == len(bump_lines) == 2
+    assert all(line.get_linestyle() == "--" for line in bump_lines)
+    assert [line.get_color() for line in bump_lines] == [line.get_color() for line in steps_lines]
+    expected = moving_average(logs[1].bumps, 10)
+    assert np.allclose(bump_lines[1].get_ydata(), expected)
+    plt.close(fig)
+
+
+def test_single_log_draws_bumps_on_their_own_axis(tmp_path) -> None:
+    import matplotlib.pyplot as plt
+
+    from koolio_pymunk.plotting import make_figure
+
+    write_log(tmp_path / "t.csv", 30)
+    log = read_log(tmp_path / "t.csv")
+    fig = make_figure([log], 10)
+    bumps = [ax for ax in fig.axes if "bumps" in ax.get_ylabel()]
+    assert len(bumps) == 1 and len(bumps[0].get_lines()) == 1
+    # The axis covers the whole average (not the default 0..1 it had before plotting).
+    assert bumps[0].get_ylim()[1] >= moving_average(log.bumps, 10).max() > 1
+    plt.close(fig)
+
+
+def test_plot_takes_logs_positionally(tmp_path, capsys) -> None:
+    a, b = tmp_path / "robot.csv", tmp_path / "sim.csv"
+    write_log(a, 20)
+    write_log(b, 25)
+    out = tmp_path / "c.png"
+    assert main(["plot", str(a), "--out", str(out)]) == 0
+    assert "20 episodes from 1 log(s)" in capsys.readouterr().out
+    assert main(["plot", str(a), "--log", str(b), "--out", str(out)]) == 0
+    assert "45 episodes from 2 log(s)" in capsys.readouterr().out

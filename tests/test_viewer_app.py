@@ -217,7 +217,7 @@ def test_robot_colour_in_the_window(tmp_path, config, at, heading, colour) -> No
     key(pygame.K_s)  # Show Sensors off: no state colour
     app.frame()
     app.draw()
-    assert screen_pixel(app, robot_pixel(app)) == draw.ROBOT_PLAIN
+    assert screen_pixel(app, robot_pixel(app)) == draw.ROBOT_NORMAL
 
 
 def test_hud_and_stats_present_and_hidden(tmp_path, config) -> None:

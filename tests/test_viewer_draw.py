@@ -118,7 +118,7 @@ def test_no_sensor_lines_and_plain_robot_when_sensors_hidden() -> None:
     draw_env(surface, cam, env, show_sensors=False)
     assert tuple(surface.get_at(cam.to_screen((252.0, 96.0))))[:3] == draw.ZONE
     assert tuple(surface.get_at(cam.to_screen((120.0, 96.0))))[:3] == draw.FLOOR
-    assert tuple(surface.get_at(body_pixel(env, cam)))[:3] == draw.ROBOT_PLAIN
+    assert tuple(surface.get_at(body_pixel(env, cam)))[:3] == draw.ROBOT_NORMAL
 
 
 def test_draw_arena_colours_at_world_points() -> None:

@@ -22,12 +22,14 @@ from dataclasses import dataclass, field
 from pathlib import Path as FilePath
 
 import pygame
+import pygame_gui
 
 from ..arena import Point
 from ..config import ROBOT_PROFILES, Config, load_config
 from ..errors import KoolioError
 from ..viewer.camera import Camera
-from . import items, view
+from . import dialogs, items, view
+from .dialogs import Prompt
 from .drive import TestDrive
 from .items import EditError, Path
 from .model import EditorModel, SaveResult
@@ -58,26 +60,6 @@ DRIVE_KEYS = {
     pygame.K_RIGHT: "right",
     pygame.K_SPACE: "stop",
 }
-
-
-@dataclass
-class Prompt:
-    """A question in the status bar: a line of text, or yes / no."""
-
-    kind: str  # "text" or "confirm"
-    label: str
-    on_done: Callable[[str], None]
-    text: str = ""
-    fresh: bool = True
-    """The text is the proposed default: typing replaces it, Backspace clears it."""
-
-    def type(self, s: str) -> None:
-        self.text = s if self.fresh else self.text + s
-        self.fresh = False
-
-    def backspace(self) -> None:
-        self.text = "" if self.fresh else self.text[:-1]
-        self.fresh = False
 
 
 @dataclass
@@ -128,6 +110,10 @@ class EditorApp:
         self.goal_rows: list[tuple[pygame.Rect, str]] = []
         self.running = True
         self._prompt_opened = False
+        self.drawn_labels: dict[str, list[pygame.Rect]] = {}
+        """Rectangles of the edge-length labels and goal names of the last frame."""
+        self.ui = pygame_gui.UIManager(size)
+        """pygame-gui: the questions (text, yes / no, files) are its windows."""
         self.fit()
 
     # =====================================================================================
@@ -138,6 +124,7 @@ class EditorApp:
         clock = pygame.time.Clock()
         while self.running:
             self.process(pygame.event.get())
+            self.ui.update(clock.get_time() / 1000.0)
             self.render()
             pygame.display.flip()
             clock.tick(60)
@@ -149,8 +136,14 @@ class EditorApp:
             self.handle(event)
 
     def pump(self) -> None:
-        """Process the queued (e.g. posted) events and redraw: one frame, no waiting."""
-        self.process(pygame.event.get())
+        """Process the queued (e.g. posted) events, and the events the widgets post in
+        reply, then redraw: one frame, no waiting."""
+        for _ in range(5):
+            events = pygame.event.get()
+            if not events:
+                break
+            self.process(events)
+        self.ui.update(0.0)
         self.render()
 
     def render(self) -> None:
@@ -186,10 +179,17 @@ class EditorApp:
     def _dispatch(self, event: pygame.event.Event) -> None:
         if event.type == pygame.QUIT:
             self.request_quit()
-        elif event.type == pygame.TEXTINPUT:
-            if self.prompt is not None and self.prompt.kind == "text" and not self._prompt_opened:
-                self.prompt.type(event.text)
-        elif event.type == pygame.KEYDOWN:
+            return
+        if event.type == pygame.TEXTINPUT and self._prompt_opened:
+            return  # the key that opened the question is no answer to it
+        if self.prompt is not None and event.type == pygame.KEYDOWN and self._prompt_key(event):
+            return
+        consumed = self.ui.process_events(event)
+        if self._gui_event(event) or consumed:
+            return
+        if self.prompt is not None and event.type in (pygame.KEYDOWN, pygame.TEXTINPUT):
+            return  # keys go to the question while it is open
+        if event.type == pygame.KEYDOWN:
             self.on_key(event.key, getattr(event, "mod", 0))
         elif event.type == pygame.MOUSEMOTION:
             self.on_motion(tuple(event.pos))
@@ -205,9 +205,6 @@ class EditorApp:
 
     # -- keys ---------------------------------------------------------------------------------
     def on_key(self, key: int, mod: int) -> None:
-        if self.prompt is not None:
-            self._prompt_key(key)
-            return
         ctrl = bool(mod & pygame.KMOD_CTRL)
         shift = bool(mod & pygame.KMOD_SHIFT)
         if ctrl:
@@ -228,11 +225,11 @@ class EditorApp:
             else:
                 self.save()
         elif key == pygame.K_o:
-            self.ask_text("Open arena file:", self._open, str(self.model.path or ""))
+            self.ask_file("Open arena file", self._open, str(self.model.path or ""), True)
         elif key == pygame.K_n:
             self._unless_dirty("start a new arena", lambda: self._new())
         elif key == pygame.K_d:
-            self.ask_text("Import door table:", self._import, "arenas/hallway_doors.yaml")
+            self.ask_file("Import door table", self._import, "arenas/hallway_doors.yaml", True)
         elif key == pygame.K_q:
             self.request_quit()
 
@@ -250,7 +247,9 @@ class EditorApp:
             self._screenshot_next()
         elif key == pygame.K_r and sel is not None and sel[0] == "goals":
             old = self.model.arena.goals[sel[1]].name
-            self.ask_text(f"Rename goal {old} to:", lambda s: self.model.rename_goal(old, s), old)
+            self.ask_text(
+                f"Rename goal {old} to:", lambda s: self.model.rename_goal(old, s), old, "Rename"
+            )
         elif key == pygame.K_a and sel is not None and sel[0] == "goals":
             self.model.set_active_goal(self.model.arena.goals[sel[1]].name)
         elif key == pygame.K_TAB:
@@ -258,7 +257,7 @@ class EditorApp:
         elif key == pygame.K_p:
             self._type_position()
         elif key == pygame.K_n:
-            self.ask_text("Arena name:", self.model.set_name, self.model.arena.name)
+            self.ask_text("Arena name:", self.model.set_name, self.model.arena.name, "Rename")
         elif key == pygame.K_h:
             heading = self.model.arena.start.heading_deg
             self.model.set_heading(0.0 if heading is None else None)
@@ -291,33 +290,109 @@ class EditorApp:
         elif key == pygame.K_F12:
             self._screenshot_next()
 
-    def _prompt_key(self, key: int) -> None:
+    def _prompt_key(self, event: pygame.event.Event) -> bool:
+        """Keys that answer the open question; True when ``event`` was one."""
+        key = event.key
+        if key == pygame.K_ESCAPE:
+            self.cancel_prompt()
+            return True
+        if self.prompt.kind != "confirm":
+            return False  # the text line takes the keys (Enter: its FINISHED event)
+        if key == pygame.K_y:
+            self.answer_prompt("y")
+        elif key == pygame.K_n:
+            self.cancel_prompt()
+        return True
+
+    def _gui_event(self, event: pygame.event.Event) -> bool:
+        """The open question's widgets: OK, Cancel, Enter in its text line, its window
+        closed. True when ``event`` was one of these."""
         prompt = self.prompt
-        if prompt.kind == "confirm":
-            if key == pygame.K_y:
-                self.prompt = None
-                prompt.on_done("y")
-            elif key in (pygame.K_n, pygame.K_ESCAPE):
-                self.prompt = None
-                self.say("cancelled")
-            return
-        if key in (pygame.K_RETURN, pygame.K_KP_ENTER):
-            self.prompt = None
-            prompt.on_done(prompt.text.strip())
-        elif key == pygame.K_ESCAPE:
+        if prompt is None:
+            return False
+        element = getattr(event, "ui_element", None)
+        if event.type == pygame_gui.UI_TEXT_ENTRY_FINISHED and element is prompt.entry:
+            self._enter_pressed(prompt)
+        elif event.type == pygame_gui.UI_BUTTON_PRESSED and prompt.kind == "text":
+            if element is prompt.ok:
+                self.answer_prompt(prompt.text.strip())
+            elif element is prompt.cancel:
+                self.cancel_prompt()
+            else:
+                return False
+        elif event.type == pygame_gui.UI_CONFIRMATION_DIALOG_CONFIRMED and element is prompt.window:
+            self.answer_prompt("y")
+        elif event.type == pygame_gui.UI_FILE_DIALOG_PATH_PICKED and element is prompt.window:
+            self.answer_prompt(event.text)
+        elif event.type == pygame_gui.UI_WINDOW_CLOSE and element is prompt.window:
             self.prompt = None
             self.say("cancelled")
-        elif key == pygame.K_BACKSPACE:
-            prompt.backspace()
+        else:
+            return False
+        return True
 
-    def ask_text(self, label: str, on_done: Callable[[str], None], default: str = "") -> None:
-        """Ask for a line of text in the status bar (Enter confirms, Esc cancels)."""
-        self.prompt = Prompt("text", label, on_done, default)
-        self._prompt_opened = True
+    def _enter_pressed(self, prompt: Prompt) -> None:
+        if prompt.kind == "text":
+            self.answer_prompt(prompt.text.strip())
+            return
+        picked = dialogs.picked_file(prompt)
+        if picked is not None:
+            self.answer_prompt(picked)
+        else:  # a folder: the dialog now lists it
+            dialogs.select_all(self.ui, prompt.entry)
 
-    def ask_yes_no(self, label: str, on_yes: Callable[[], None]) -> None:
-        """Ask a yes / no question in the status bar (Y confirms; N or Esc cancels)."""
-        self.prompt = Prompt("confirm", f"{label} [y/n]", lambda _: on_yes())
+    def answer_prompt(self, answer: str) -> None:
+        """Close the open question and act on ``answer``."""
+        prompt, self.prompt = self.prompt, None
+        if prompt is None:
+            return
+        prompt.close()
+        prompt.on_done(answer)
+
+    def cancel_prompt(self) -> None:
+        prompt, self.prompt = self.prompt, None
+        if prompt is not None:
+            prompt.close()
+            self.say("cancelled")
+
+    def _canvas_rect(self) -> pygame.Rect:
+        return pygame.Rect(self.camera.viewport)
+
+    def ask_text(
+        self, label: str, on_done: Callable[[str], None], default: str = "", title: str = ""
+    ) -> None:
+        """Ask for a line of text in a pygame-gui window, ``default`` proposed and
+        selected (Enter or OK confirms, Esc or Cancel cancels)."""
+        self._open_prompt(
+            dialogs.text_prompt(
+                self.ui,
+                self._canvas_rect(),
+                title or "Koolio arena editor",
+                label,
+                default,
+                on_done,
+            )
+        )
+
+    def ask_yes_no(self, label: str, on_yes: Callable[[], None], action: str = "Yes") -> None:
+        """Ask yes or no in a pygame-gui confirmation dialog (Y confirms; N or Esc
+        cancels)."""
+        self._open_prompt(
+            dialogs.confirm_prompt(self.ui, self._canvas_rect(), label, action, on_yes)
+        )
+
+    def ask_file(
+        self, title: str, on_done: Callable[[str], None], path: str, existing: bool
+    ) -> None:
+        """Ask for an arena or door-table file in a pygame-gui file dialog."""
+        self._open_prompt(
+            dialogs.file_prompt(self.ui, self._canvas_rect(), title, path, existing, on_done)
+        )
+
+    def _open_prompt(self, prompt: Prompt) -> None:
+        if self.prompt is not None:
+            self.prompt.close()
+        self.prompt = prompt
         self._prompt_opened = True
 
     # -- mouse --------------------------------------------------------------------------------
@@ -328,7 +403,10 @@ class EditorApp:
             self.hover = self.hover_edge = None
             return
         world = self.camera.to_world(pos)
-        self.cursor = self.model.snap(world, self._tol(), self._exclude())
+        if self.drag is None and self.tool in ("goal", "marker"):
+            self.cursor = self.model.snap_inside(world)
+        else:
+            self.cursor = self.model.snap(world, self._tol(), self._exclude())
         if self.drag is not None:
             self._drag_to(pos, world)
         elif self.drive is None:
@@ -383,7 +461,13 @@ class EditorApp:
         if not (drag.moved or far):
             return
         drag.moved = True
-        if drag.kind == "point":
+        if (
+            drag.kind == "point"
+            and drag.path[0] in ("goals", "end_of_world")
+            and len(drag.path) == 2
+        ):
+            self.model.drag_move(drag.path, self.model.snap_inside(world))
+        elif drag.kind == "point":
             self.model.drag_move(drag.path, self.model.snap(world, self._tol(), drag.path))
         else:
             dx = self.model.snap_value(world[0] - drag.start_world[0])
@@ -403,14 +487,15 @@ class EditorApp:
         elif tool in ("obstacle", "zone"):
             self._polygon_press(tool, snapped)
         elif tool == "goal":
-            name = self.model.next_goal_name()
+            at = self.model.snap_inside(world)
             self.ask_text(
-                f"Name (room number) of the goal at ({snapped[0]:g}, {snapped[1]:g}):",
-                lambda s: self._add_goal(s, snapped),
-                name,
+                f"Name (room number) of the goal at ({at[0]:g}, {at[1]:g}):",
+                lambda s: self._add_goal(s, at),
+                self.model.next_goal_name(),
+                "New goal",
             )
         elif tool == "marker":
-            self.selection = self.model.add_marker(snapped)
+            self.selection = self.model.add_marker(self.model.snap_inside(world))
         elif tool == "start":
             if shift:
                 sx, sy = self.model.arena.start.at
@@ -548,13 +633,15 @@ class EditorApp:
                 f"INVALID: {result.message} -- write {result.path} anyway"
                 + (" (the valid file is kept as .bak)?" if result.path.exists() else "?"),
                 lambda: self._report_save(self.model.save(path, confirm=True)),
+                "Write anyway",
             )
             return result
         self._report_save(result)
         return result
 
     def save_as_prompt(self) -> None:
-        self.ask_text("Save as:", lambda s: self.save(s) if s else None, str(self.model.path or ""))
+        default = str(self.model.path or f"{self.model.arena.name or 'arena'}.yaml")
+        self.ask_file("Save arena as", lambda s: self.save(s) if s else None, default, False)
 
     def start_drive(self) -> None:
         problem = self.model.problem()
@@ -588,7 +675,7 @@ class EditorApp:
 
     def _unless_dirty(self, what: str, action: Callable[[], None]) -> None:
         if self.model.dirty and (self.model.arena.walls or self.model.path is not None):
-            self.ask_yes_no(f"Unsaved changes: {what} anyway?", action)
+            self.ask_yes_no(f"Unsaved changes: {what} anyway?", action, what.capitalize())
         else:
             action()
 
@@ -704,7 +791,9 @@ class EditorApp:
                 raise EditError(f"position: expected two numbers 'x y', got {s!r}") from None
             self.model.move_point(sel, p)
 
-        self.ask_text(f"Move {items.path_str(sel)} to (x y, inches):", done, f"{x:g} {y:g}")
+        self.ask_text(
+            f"Move {items.path_str(sel)} to (x y, inches):", done, f"{x:g} {y:g}", "Position"
+        )
 
     def _arrow(self, key: int, shift: bool) -> None:
         dx = {pygame.K_LEFT: -1, pygame.K_RIGHT: 1}.get(key, 0)

@@ -40,6 +40,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path as FilePath
 
+from .. import geometry
 from ..arena import (
     Arena,
     Goal,
@@ -63,6 +64,8 @@ UNTITLED = "<untitled>"
 DEFAULT_TILE_IN = 24.0
 """Ceiling tile side, inches (paper, Figure 3)."""
 HISTORY_LIMIT = 1000
+WALL_INSET = 1.0
+"""A goal or marker placed on a wall goes this far inside it (inches; the plates' 1 in)."""
 NEW_HEADER = "Made with tools/arena_editor.py. Units: inches (1 ceiling tile = 24 in)."
 
 
@@ -370,6 +373,44 @@ class EditorModel:
             if best is not None:
                 return best
         return (self.snap_value(p[0]), self.snap_value(p[1]))
+
+    def snap_inside(self, p: Point) -> Point:
+        """Where a goal or end-of-world marker placed at ``p`` goes: ``p`` on the snap grid,
+        unless that grid point lies on the walls or outside them (with the default 24 in
+        snap a click near a wall lands on it, which the validator refuses). Then it goes
+        :data:`WALL_INSET` inside the wall nearest ``p``, at the grid position along that
+        wall, as the door plates sit 1 in off their wall."""
+        q = self.snap(p)
+        walls = self._arena.walls
+        if len(walls) < 3 or geometry.point_in_polygon(q, walls):
+            return q
+        n = len(walls)
+        i = min(
+            range(n), key=lambda k: geometry.distance_point_segment(p, walls[k], walls[(k + 1) % n])
+        )
+        a, b = walls[i], walls[(i + 1) % n]
+        foot = self._snap_along(items.closest_point(p, a, b), a, b)
+        length = math.dist(a, b)
+        if length == 0.0:
+            return q
+        side = 1.0 if geometry.polygon_area(walls) > 0 else -1.0  # interior on the left
+        nx, ny = -(b[1] - a[1]) / length * side, (b[0] - a[0]) / length * side
+        r = (round(foot[0] + nx * WALL_INSET, 6) + 0.0, round(foot[1] + ny * WALL_INSET, 6) + 0.0)
+        return r if geometry.point_in_polygon(r, walls) else q
+
+    def _snap_along(self, foot: Point, a: Point, b: Point) -> Point:
+        """``foot`` (on edge ``a``-``b``) moved to the grid along an axis-aligned edge, kept
+        :data:`WALL_INSET` from its ends."""
+        for k in (0, 1):  # k: the coordinate that varies along the edge
+            if a[1 - k] == b[1 - k] and a[k] != b[k]:
+                lo, hi = sorted((a[k], b[k]))
+                v = self.snap_value(foot[k])
+                if hi - lo > 2 * WALL_INSET:
+                    v = min(max(v, lo + WALL_INSET), hi - WALL_INSET)
+                else:
+                    v = foot[k]
+                return (v, a[1]) if k == 0 else (a[0], v)
+        return foot
 
     def snap_value(self, x: float) -> float:
         """``x`` rounded to the snap step (tidy floats: no ``96.00000000001``)."""

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 
 import pygame
 
+from .. import geometry
 from ..arena import Arena, Point
 from ..viewer import draw
 from ..viewer.camera import Camera
@@ -69,10 +70,11 @@ def _num(x: float) -> str:
 # Frame
 # =========================================================================================
 def draw_frame(app: EditorApp) -> None:
-    """Draw the whole window."""
+    """Draw the whole window; an open question (a pygame-gui window) on top."""
     draw_canvas(app)
     draw_panel(app)
     draw_status(app)
+    app.ui.draw_ui(app.screen)
 
 
 def draw_canvas(app: EditorApp) -> None:
@@ -124,10 +126,9 @@ def draw_grid(surface: pygame.Surface, cam: Camera, tile: float) -> None:
 # Editing overlay
 # =========================================================================================
 def draw_editing(surface: pygame.Surface, cam: Camera, app: EditorApp, arena: Arena) -> None:
-    if app.show_lengths:
-        draw_lengths(surface, cam, arena, app.model.tile)
+    lengths = draw_lengths(surface, cam, arena, app.model.tile) if app.show_lengths else []
     draw_start(surface, cam, arena, app.model.robot_radius)
-    draw_goal_labels(surface, cam, arena)
+    app.drawn_labels = {"lengths": lengths, "goals": draw_goal_labels(surface, cam, arena, lengths)}
     draw_handles(surface, cam, arena)
     draw_rubber_band(surface, cam, app, arena)
     if app.hover_edge is not None:
@@ -145,11 +146,18 @@ def draw_editing(surface: pygame.Surface, cam: Camera, app: EditorApp, arena: Ar
             _draw_item(surface, cam, arena, path, ERROR, 3, big=True)
 
 
-def draw_lengths(surface: pygame.Surface, cam: Camera, arena: Arena, tile: float) -> None:
-    """Each wall and obstacle edge's length at its middle, when the edge is long enough."""
+def draw_lengths(
+    surface: pygame.Surface, cam: Camera, arena: Arena, tile: float
+) -> list[pygame.Rect]:
+    """Each wall and obstacle edge's length beside its middle, on the edge's outer side
+    (outside the walls, outside an obstacle) so that it covers no goal or marker, or on
+    the inner side where the outer one is off the canvas; edges shorter than 80 pixels
+    get none. Returns the labels' rectangles."""
+    out = []
     for poly_path in items.polygon_paths(arena)[: 1 + len(arena.obstacles)]:
         poly = items.get_polygon(arena, poly_path)
         n = len(poly)
+        ccw = n >= 3 and geometry.polygon_area(poly) > 0
         for i in range(n if n >= 3 else n - 1):
             a, b = poly[i], poly[(i + 1) % n]
             sa, sb = cam.to_screen(a), cam.to_screen(b)
@@ -161,9 +169,35 @@ def draw_lengths(surface: pygame.Surface, cam: Camera, arena: Arena, tile: float
             if abs(tiles - round(tiles)) < 1e-9:
                 label += f" ({round(tiles)} t)"
             img = draw.font(SMALL).render(label, True, LENGTH_TEXT)
-            box = img.get_rect(center=((sa[0] + sb[0]) // 2, (sa[1] + sb[1]) // 2)).inflate(4, 0)
+            box = img.get_rect().inflate(4, 0)
+            side = ccw if n >= 3 else None
+            box.center = _beside(sa, sb, box, side)
+            if side is not None and not pygame.Rect(cam.viewport).contains(box):
+                box.center = _beside(sa, sb, box, not side)  # off the canvas: inside
             pygame.draw.rect(surface, LENGTH_BG, box)
             surface.blit(img, img.get_rect(center=box.center))
+            out.append(box)
+    return out
+
+
+def _beside(
+    sa: tuple[int, int], sb: tuple[int, int], box: pygame.Rect, ccw: bool | None
+) -> tuple[int, int]:
+    """Centre for ``box`` by the middle of screen edge ``sa``-``sb``: on the edge's right
+    in world terms (outside a counter-clockwise polygon), left for a clockwise one, on
+    the edge for an open polyline (``ccw`` None)."""
+    mx, my = (sa[0] + sb[0]) / 2.0, (sa[1] + sb[1]) / 2.0
+    if ccw is None:
+        return round(mx), round(my)
+    dx, dy = sb[0] - sa[0], sb[1] - sa[1]
+    d = math.hypot(dx, dy) or 1.0
+    # The world's right of a->b, (dy, -dx) in world terms, is (-dy, dx) on the screen
+    # (whose y points down).
+    nx, ny = -dy / d, dx / d
+    if not ccw:
+        nx, ny = -nx, -ny
+    off = 3 + abs(nx) * box.w / 2.0 + abs(ny) * box.h / 2.0
+    return round(mx + nx * off), round(my + ny * off)
 
 
 def draw_start(surface: pygame.Surface, cam: Camera, arena: Arena, radius: float) -> None:
@@ -182,16 +216,49 @@ def draw_start(surface: pygame.Surface, cam: Camera, arena: Arena, radius: float
     pygame.draw.line(surface, draw.START, c, tip, width=2)
 
 
-def draw_goal_labels(surface: pygame.Surface, cam: Camera, arena: Arena) -> None:
-    """Names of the goals that have no door of their own (doors are labelled by the viewer)."""
+def draw_goal_labels(
+    surface: pygame.Surface, cam: Camera, arena: Arena, avoid: list[pygame.Rect] | None = None
+) -> list[pygame.Rect]:
+    """Names of the goals that have no door of their own (doors are labelled by the
+    viewer), each beside its dot where it overlaps neither the edge lengths (``avoid``)
+    nor another name. Returns the names' rectangles."""
     doors = {d.name for d in arena.doors}
+    taken = list(avoid or [])
+    out = []
     for g in arena.goals:
         if g.name in doors:
             continue
         s = cam.to_screen(g.at)
         colour = draw.GOAL if g.name == arena.active_goal else (80, 120, 90)
         img = draw.font(FONT).render(g.name, True, colour)
-        surface.blit(img, (s[0] + 7, s[1] - img.get_height() - 2))
+        rect = _free_spot(s, img.get_size(), taken, pygame.Rect(cam.viewport))
+        surface.blit(img, rect)
+        taken.append(rect)
+        out.append(rect)
+    return out
+
+
+def _free_spot(
+    at: tuple[int, int], size: tuple[int, int], taken: list[pygame.Rect], area: pygame.Rect
+) -> pygame.Rect:
+    """A rectangle of ``size`` beside point ``at`` that overlaps none of ``taken`` (and
+    lies in ``area``): above right, below right, above left, below left, then further
+    out; the first place when every one is taken."""
+    w, h = size
+    spots = []
+    for reach in (1, 2, 3):
+        d = 7 + (reach - 1) * (h + 2)
+        spots += [
+            (at[0] + d, at[1] - h - d + 5),
+            (at[0] + d, at[1] + d - 5),
+            (at[0] - w - d, at[1] - h - d + 5),
+            (at[0] - w - d, at[1] + d - 5),
+        ]
+    rects = [pygame.Rect(x, y, w, h) for x, y in spots]
+    for r in rects:
+        if area.contains(r) and r.collidelist(taken) < 0:
+            return r
+    return rects[0]
 
 
 def draw_handles(surface: pygame.Surface, cam: Camera, arena: Arena) -> None:
@@ -447,14 +514,21 @@ def draw_status(app: EditorApp) -> None:
             text(surface, part, (x, y + LINE * (1 + k)), ERROR)
     y3 = y + 3 * LINE
     if app.prompt is not None:
-        label = app.prompt.label + (f" {app.prompt.text}_" if app.prompt.kind == "text" else "")
+        keys = PROMPT_KEYS[app.prompt.kind]
         pygame.draw.rect(
             surface, (255, 240, 170), pygame.Rect(rect.x, y3 - 3, rect.width, LINE + 4)
         )
-        text(surface, _fit(label, rect.width - 20), (x, y3), STATUS_TEXT)
+        text(surface, _fit(keys, rect.width - 20), (x, y3), STATUS_TEXT)
     elif app.message:
         colour = ERROR if app.message_is_error else STATUS_TEXT
         text(surface, _fit(app.message, rect.width - 20), (x, y3), colour)
+
+
+PROMPT_KEYS = {
+    "text": "a question is open: type the answer (it replaces the selection), Enter OK, Esc cancel",
+    "confirm": "a question is open: Y yes, N or Esc no",
+    "file": "choose a file, or type its path (it replaces the selection); Enter OK, Esc cancel",
+}
 
 
 def _wrap(s: str, width: int, size: int = FONT) -> list[str]:

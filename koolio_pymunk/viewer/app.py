@@ -5,11 +5,13 @@
 :mod:`koolio_pymunk.viewer.session`), or, with ``--greedy``, follows a learned policy
 without changing the table.
 
-Layout (default 1280 x 800): for a long arena an overview of the whole arena across the
-top (click it to look there); below it the arena view (mouse wheel zooms, drag pans,
-Follow keeps the robot in view); below that the HUD, Stats and live learning-curve
-panels; on the right the control panel (pygame-gui buttons, check boxes and a slider).
-Every control has a keyboard shortcut (F1 shows them).
+Layout (default 1280 x 800; text and controls scale with the window): for a long arena
+an overview of the whole arena across the top (click it to look there); below it the
+arena view (mouse wheel zooms, drag pans, Follow keeps the robot in view); below that
+the HUD, Stats and live learning-curve panels; on the right the control panel (pygame-gui
+buttons, check boxes and a slider), or, with ``--panel-window`` or key P, the same panel
+in a window of its own (the paper's future-work floating control panel). Every control
+has a keyboard shortcut (F1 shows them).
 
 Pacing: with the clock, steps run at the slider's rate (steps per second). Clockless
 runs ``episode.clockless_loop_count`` steps per tick back to back and redraws at most
@@ -27,9 +29,12 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ..errors import KoolioError
+
+if TYPE_CHECKING:
+    from .hud import Style
 
 #: The screen is redrawn at most this often (frames per second).
 DRAW_FPS = 30
@@ -43,6 +48,9 @@ SPEED_MIN, SPEED_MAX = 1.0, 1000.0
 DEFAULT_SIZE = (1280, 800)
 MIN_SIZE = (1080, 700)
 PANEL_W = 230
+#: Colour of the hint lines (what the control under the pointer does).
+HINT = "#ffd870"
+NO_HINT = "(point at a control: what it does)"
 CURVE_WINDOW = 25
 #: While stepping, the learning curve is redrawn at most this often (seconds).
 CURVE_INTERVAL = 0.5
@@ -57,6 +65,7 @@ HELP_LINES: list[tuple[str, str]] = [
     ("A", "Auto Rescue"),
     ("C", "Clockless"),
     ("F", "Follow the robot"),
+    ("P", "control panel: own window / docked"),
     ("] / [", "clock faster / slower"),
     ("+ / -", "zoom in / out"),
     ("0 / Home", "fit the arena"),
@@ -143,6 +152,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--paused", action="store_true", help="open paused (press Begin); default: running"
     )
+    p.add_argument(
+        "--panel-window",
+        action="store_true",
+        help="the control panel in a window of its own (the paper's floating control panel; "
+        "key P floats or docks it)",
+    )
 
 
 def _check_args(args: argparse.Namespace) -> tuple[int, Path] | None:
@@ -196,15 +211,20 @@ def run(args: argparse.Namespace) -> int:
             discard_on_close=args.discard_unfinished,
             max_steps=args.steps,
             screenshot_every=every,
+            panel_window=args.panel_window,
+            config_name=args.config,
         )
         app.run()
         if args.screenshot:
             app.draw()
             app.save_screenshot(args.screenshot)
         app.finish()
+        from .hud import plural
+
         say = print
         say(
-            f"view: {session.total_steps} steps, {session.stats.episodes} episodes finished "
+            f"view: {plural(session.total_steps, 'step')}, "
+            f"{plural(session.stats.episodes, 'episode')} finished "
             f"({session.stats.goals} at the goal)"
             + ("" if session.learn else ", greedy: table unchanged")
             + (f"; screenshot {args.screenshot}" if args.screenshot else "")
@@ -233,38 +253,54 @@ def _quit_pygame() -> None:
 # -- layout --------------------------------------------------------------------------------
 @dataclass
 class Layout:
-    """Screen rectangles ``(x, y, w, h)`` of the window's parts."""
+    """Screen rectangles ``(x, y, w, h)`` of the window's parts (``controls`` is None when
+    the control panel floats in a window of its own)."""
 
     overview: tuple[int, int, int, int] | None
     main: tuple[int, int, int, int]
     hud: tuple[int, int, int, int]
     stats: tuple[int, int, int, int]
     curve: tuple[int, int, int, int]
-    controls: tuple[int, int, int, int]
+    controls: tuple[int, int, int, int] | None
 
     @classmethod
-    def compute(cls, size: tuple[int, int], bounds: tuple[float, float, float, float]) -> Layout:
-        """Arena views on the left (overview on top for a long arena), panels below,
-        the control panel on the right."""
+    def compute(
+        cls,
+        size: tuple[int, int],
+        bounds: tuple[float, float, float, float],
+        st: Style | None = None,
+        *,
+        docked: bool = True,
+        hud_rows: int = 12,
+    ) -> Layout:
+        """Arena views on the left (overview on top for a long arena), panels below, the
+        control panel on the right (unless it floats: then the views take the width).
+        ``st`` scales the panels; ``hud_rows`` is the number of state fields."""
+        from .hud import PLAIN
+
+        st = st or PLAIN
         w, h = size
-        left = w - PANEL_W
+        panel_w = st.px(PANEL_W) if docked else 0
+        left = w - panel_w
         xmin, ymin, xmax, ymax = bounds
         aspect = (ymax - ymin) / max(1e-9, xmax - xmin)
         overview = None
         top = 0
         if aspect < 0.35:
-            oh = min(max(70, round(left * aspect * 1.06) + 8), round(h * 0.22))
+            oh = min(max(st.px(70), round(left * aspect * 1.06) + 8), round(h * 0.22))
             overview = (0, 0, left, oh)
             top = oh
-        bottom_h = min(330, max(290, round(h * 0.38)))
+        hud_h = st.head_h + (hud_rows + 2) * st.row_h + st.px(33) + st.pad
+        bottom_h = min(round(h * 0.45), max(hud_h, st.px(290)))
         main = (0, top, left, h - top - bottom_h)
         y = h - bottom_h
-        hud_w = max(320, round(left * 0.36))
-        stats_w = max(265, round(left * 0.28))
+        hud_w = max(st.px(372), round(left * 0.34))
+        stats_w = max(st.px(250), round(left * 0.25))
         hud = (0, y, hud_w, bottom_h)
         stats = (hud_w, y, stats_w, bottom_h)
         curve = (hud_w + stats_w, y, left - hud_w - stats_w, bottom_h)
-        return cls(overview, main, hud, stats, curve, (left, 0, PANEL_W, h))
+        controls = (left, 0, panel_w, h) if docked else None
+        return cls(overview, main, hud, stats, curve, controls)
 
 
 # -- the window -------------------------------------------------------------------------------
@@ -279,6 +315,24 @@ def slider_to_speed(pos: float) -> float:
     return float(round(v)) if v >= 10 else round(v, 1)
 
 
+def wrap(s: str, width: int, measure: Callable[[str], int]) -> list[str]:
+    """``s`` broken at spaces into lines at most ``width`` wide (``measure`` gives a width).
+
+    >>> wrap("one two three", 9, len)
+    ['one two', 'three']
+    """
+    lines: list[str] = []
+    cur = ""
+    for word in s.split():
+        trial = f"{cur} {word}" if cur else word
+        if cur and measure(trial) > width:
+            lines.append(cur)
+            cur = word
+        else:
+            cur = trial
+    return [*lines, cur] if cur else lines
+
+
 class ViewerApp:
     """The window: arena views, panels, controls, and the loop that steps the session.
 
@@ -286,6 +340,10 @@ class ViewerApp:
     :attr:`screen`. Flags: :attr:`running`, :attr:`show_sensors`, :attr:`show_hud`,
     :attr:`show_stats`, :attr:`clockless`, :attr:`follow`, :attr:`help`, :attr:`speed`;
     Auto Rescue is the environment's own ``config.rescue.auto_rescue_toggle``.
+
+    The control panel sits on the right of the window, or (``panel_window=True``, key P,
+    the paper's future-work "floating control panel") in a window of its own,
+    :attr:`panel_window` (a ``pygame.Window``); closing that window docks it again.
     """
 
     def __init__(
@@ -300,10 +358,13 @@ class ViewerApp:
         max_steps: int | None = None,
         screenshot_every: tuple[int, Path] | None = None,
         draw_fps: float = DRAW_FPS,
+        panel_window: bool = False,
+        config_name: str | None = None,
     ) -> None:
         import pygame
         import pygame_gui
 
+        from . import hud
         from .camera import Camera
 
         self.pg, self.gui = pygame, pygame_gui
@@ -317,12 +378,11 @@ class ViewerApp:
         self.session = session
         self.env = session.env
         self.size = size
+        self.style = hud.style(size)
+        self.config_name = config_name or "default"
         self.bounds = self.env.world_arena.bounds()
-        self.layout = Layout.compute(size, self.bounds)
-        self.overview_cam = Camera(self.layout.overview) if self.layout.overview else None
-        if self.overview_cam is not None:
-            self.overview_cam.fit(self.bounds, margin=0.02)
-        self.camera = Camera(self.layout.main)
+        self.camera = Camera((0, 0, 1, 1))
+        self.overview_cam: Any = None
         self.running = running
         self.show_sensors = True
         self.show_hud = True
@@ -351,126 +411,160 @@ class ViewerApp:
         self._rate_steps = 0
         self._drag: tuple[int, int] | None = None
         self._mouse: tuple[int, int] | None = None
-        self._curve_key: tuple[int, int] | None = None
+        self._panel_mouse: tuple[int, int] | None = None
+        self._curve_key: tuple[int, int, int] | None = None
         self._curve_surf: pygame.Surface | None = None
         self._curve_time = -math.inf
         self._clock = pygame.time.Clock()
+        self.drawn_curve: dict[str, Any] = {}
         from .render import ArenaLayer
 
         self._layers = (ArenaLayer(), ArenaLayer())  # overview, arena view
-        self.fit_view()
-        self.manager = pygame_gui.UIManager(size)
-        self._build_controls()
+        self.panel_window: Any = None
         self.drawn: dict[str, Any] = {}
+        self._arrange(panel_window)
+        self.fit_view()
 
-    # -- controls --------------------------------------------------------------------------
+    # -- layout and the control panel ------------------------------------------------------
+    def _arrange(self, floating: bool) -> None:
+        """Lay the window out with the control panel docked or floating, and build it."""
+        from .camera import Camera
+
+        s = self.env.sensors
+        rows = 2 * s.n_camera + len(s.groups) + int(s.cfg.compass.in_state)
+        self.layout = Layout.compute(
+            self.size, self.bounds, self.style, docked=not floating, hud_rows=rows
+        )
+        self.camera.viewport = self.layout.main
+        self.overview_cam = Camera(self.layout.overview) if self.layout.overview else None
+        if self.overview_cam is not None:
+            self.overview_cam.fit(self.bounds, margin=0.02)
+        if floating and self.panel_window is None:
+            self.panel_window = self._open_panel_window()
+        elif not floating and self.panel_window is not None:
+            self.panel_window.destroy()
+            self.panel_window = None
+        self._panel_mouse = None
+        self._build_controls()
+
+    def _open_panel_window(self) -> Any:
+        pg = self.pg
+        w, h = self.style.px(PANEL_W), self.size[1]
+        position: Any = pg.WINDOWPOS_UNDEFINED
+        try:
+            dw, dh = pg.display.get_desktop_sizes()[0]
+            position = (max(0, dw - w - 8), max(0, (dh - h) // 2))
+        except (pg.error, IndexError):
+            pass
+        return pg.Window("Koolio controls", (w, h), position=position)
+
+    @property
+    def panel_surface(self) -> Any:
+        """The surface the control panel is drawn on: the window's or its own window's."""
+        if self.panel_window is not None:
+            return self.panel_window.get_surface()
+        return self.screen
+
+    def set_panel_window(self, floating: bool) -> None:
+        """Float the control panel in a window of its own, or dock it in the window."""
+        if floating != (self.panel_window is not None):
+            self._arrange(floating)
+            self._curve_surf = None
+            if self.follow:
+                self._follow_robot()
+
+    def _theme(self) -> dict[str, Any]:
+        """pygame-gui theme: Noto Sans (the panels' face) at the window's scale, left-aligned
+        labels, light text on the dark panel."""
+        st = self.style
+        font = {"name": "noto_sans", "size": str(st.px(14))}
+        light = {"normal_text": "#e8ebf0"}
+        left = {"text_horiz_alignment": "left"}
+        return {
+            "defaults": {"colours": light},
+            "button": {"font": font},
+            "label": {"font": font, "colours": light, "misc": left},
+            "#title": {"font": {**font, "size": str(st.px(16)), "bold": "1"}},
+            "#centre": {"misc": {"text_horiz_alignment": "center"}},
+            "#hint": {"font": {**font, "size": str(st.px(13))}, "colours": {"normal_text": HINT}},
+            "#info": {"font": {**font, "size": str(st.px(13))}},
+        }
+
+    def _panel_mouse_position(self) -> tuple[int, int]:
+        """Where the pointer is over the control panel's surface ((-1, -1): not over it)."""
+        pos = self._panel_mouse if self.panel_window is not None else self._mouse
+        return pos if pos is not None else (-1, -1)
+
     def _build_controls(self) -> None:
-        pg, gui = self.pg, self.gui
-        x, y, w, h = self.layout.controls
-        self.panel = gui.elements.UIPanel(pg.Rect(x, y, w, h), manager=self.manager)
-        bw = w - 24
-        row = [8]
+        gui = self.gui
+        app = self
 
-        def place(height: int = 30, gap: int = 6) -> pg.Rect:
-            r = pg.Rect(10, row[0], bw, height)
-            row[0] += height + gap
-            return r
+        class PanelManager(gui.UIManager):  # type: ignore[misc, name-defined]
+            """Hover follows the pointer of the panel's own window (there may be two)."""
 
-        def button(label: str, tip: str) -> Any:
-            return gui.elements.UIButton(
-                place(), label, manager=self.manager, container=self.panel, tool_tip_text=tip
-            )
+            def _update_mouse_position(self) -> None:
+                self.mouse_position = app._panel_mouse_position()
 
-        def check(label: str, state: bool) -> Any:
-            r = place(20, 7)
-            return gui.elements.UICheckBox(
-                pg.Rect(r.x, r.y, 20, 20),
-                label,
-                manager=self.manager,
-                container=self.panel,
-                initial_state=state,
-            )
-
-        gui.elements.UILabel(
-            place(24, 4), "Koolio controls", manager=self.manager, container=self.panel
+        surface = self.panel_surface
+        self.manager = PanelManager(surface.get_size(), self._theme())
+        w, h = surface.get_size()
+        x = 0 if self.panel_window is not None else w - self.style.px(PANEL_W)
+        self.panel = gui.elements.UIPanel(
+            self.pg.Rect(x, 0, self.style.px(PANEL_W), h), manager=self.manager
         )
-        self.b_run = button(self._run_label(), "Begin / Pause learning [Space]")
-        self.b_step = button("Step [N]", "one step while paused")
-        self.b_rescue = button("Rescue [R]", "force Rescue_Robot now")
-        row[0] += 4
-        self.checks = {
-            "show_sensors": check("Show Sensors [S]", self.show_sensors),
-            "show_hud": check("Show HUD [H]", self.show_hud),
-            "show_stats": check("Show Stats [T]", self.show_stats),
-            "auto_rescue": check("Auto Rescue [A]", self.auto_rescue),
-            "clockless": check("Clockless [C]", self.clockless),
-            "follow": check("Follow robot [F]", self.follow),
-        }
-        row[0] += 2
-        self.speed_label = gui.elements.UILabel(
-            place(22, 2), self._speed_text(), manager=self.manager, container=self.panel
-        )
-        self.slider = gui.elements.UIHorizontalSlider(
-            place(24, 10),
-            speed_to_slider(self.speed),
-            (0.0, 100.0),
-            manager=self.manager,
-            container=self.panel,
-            click_increment=5,
-        )
-        third = (bw - 8) // 3
-        r = place()
-        self.b_zoom_out = gui.elements.UIButton(
-            pg.Rect(r.x, r.y, third, r.h), "Zoom -", manager=self.manager, container=self.panel
-        )
-        self.b_zoom_in = gui.elements.UIButton(
-            pg.Rect(r.x + third + 4, r.y, third, r.h),
-            "Zoom +",
-            manager=self.manager,
-            container=self.panel,
-        )
-        self.b_fit = gui.elements.UIButton(
-            pg.Rect(r.x + 2 * (third + 4), r.y, third, r.h),
-            "Fit",
-            manager=self.manager,
-            container=self.panel,
-        )
-        self.b_help = button("Help [F1]", "keyboard and mouse shortcuts")
-        row[0] += 6
-        self.b_exit = button("Exit [Q]", "fold the unfinished episode into the Q-table, save, quit")
-        self.b_exit_nosave = button(
-            "Exit Without Save [Shift+Q]",
-            "discard the unfinished episode: the Q-table file stays as after the last episode",
-        )
-        row[0] += 6
-        s = self.session
-        info = [
-            "mode: " + ("learning" if s.learn else "greedy (table read-only)"),
-            f"arena: {self.env.arena.name}  seed: {s.seed}",
-            "table: " + _short(str(s.store.path) if s.store else "read-only", 21),
-            "log: " + _short(str(s.log.path) if s.log.path else "-", 23),
-        ]
-        for line in info:
-            if row[0] + 20 > h - 4:
-                break
-            gui.elements.UILabel(place(20, 0), line, manager=self.manager, container=self.panel)
-        self.buttons: dict[Any, Callable[[], None]] = {
-            self.b_run: self.toggle_running,
-            self.b_step: self.single_step,
-            self.b_rescue: self.rescue,
-            self.b_zoom_in: lambda: self.zoom(1.25),
-            self.b_zoom_out: lambda: self.zoom(0.8),
-            self.b_fit: self.fit_view,
-            self.b_help: self.toggle_help,
-            self.b_exit: lambda: self.exit(save=True),
-            self.b_exit_nosave: lambda: self.exit(save=False),
-        }
+        self.hints: dict[Any, str] = {}
+        _ControlsBuilder(self).build()
+        self._hint_shown: Any = None
 
     def _run_label(self) -> str:
         return "Pause [Space]" if self.running else "Begin [Space]"
 
+    def _panel_label(self) -> str:
+        return "Dock panel [P]" if self.panel_window is not None else "Float panel [P]"
+
     def _speed_text(self) -> str:
+        if self.clockless:
+            return "Clock: off (clockless)"
         return f"Clock speed: {self.speed:g} steps/s"
+
+    def _sync_speed_control(self) -> None:
+        self.speed_label.set_text(self._speed_text())
+        if self.clockless:
+            self.slider.disable()
+        else:
+            self.slider.enable()
+
+    def info_lines(self) -> list[str]:
+        """The run's set-up, at the bottom of the control panel."""
+        s = self.session
+        table = str(s.table_path)
+        return [
+            "mode: " + ("learning" if s.learn else "greedy (read-only table)"),
+            f"arena: {self.env.arena.name}   seed: {s.seed}",
+            f"world: {self.env.world_name}   config: {self.config_name}",
+            "table: " + table,
+            "log: " + (str(s.log.path) if s.log.path else "none"),
+        ]
+
+    def _update_hint(self) -> None:
+        """The hovered control's description in the hint lines (instead of tool tips that
+        would cover the controls below it)."""
+        hovered = next((e for e in self.hints if getattr(e, "hovered", False)), None)
+        if hovered is self._hint_shown:
+            return
+        self._hint_shown = hovered
+        words = self.hints.get(hovered, NO_HINT)
+        from . import hud
+
+        f = hud.font(self.style.px(13))
+        lines = wrap(words, self.hint_labels[0].rect.w - 4, lambda t: f.size(t)[0])
+        for i, label in enumerate(self.hint_labels):
+            label.set_text(lines[i] if i < len(lines) else "")
+
+    @property
+    def hint(self) -> str:
+        """The hint lines' text, joined."""
+        return " ".join(t for t in (lab.text for lab in self.hint_labels) if t)
 
     @property
     def auto_rescue(self) -> bool:
@@ -488,6 +582,7 @@ class ViewerApp:
             box.set_state(bool(value))
         if name == "clockless":
             self._debt = 0.0
+            self._sync_speed_control()
 
     def toggle(self, name: str) -> None:
         current = self.auto_rescue if name == "auto_rescue" else getattr(self, name)
@@ -497,6 +592,9 @@ class ViewerApp:
         self.running = not self.running
         self.b_run.set_text(self._run_label())
         self._debt = 0.0
+
+    def toggle_panel(self) -> None:
+        self.set_panel_window(self.panel_window is None)
 
     def single_step(self) -> None:
         if not self.running:
@@ -562,18 +660,56 @@ class ViewerApp:
                 if self.quit:
                     return
 
+    def _in_panel_window(self, ev: Any) -> bool:
+        win = getattr(ev, "window", None)
+        return self.panel_window is not None and win is self.panel_window
+
     def _handle(self, ev: Any) -> None:
-        pg, gui = self.pg, self.gui
+        pg = self.pg
         if ev.type == pg.QUIT:
             self.exit(save=not self.discard_on_close)
             return
-        if self.manager.process_events(ev):
+        in_panel = self._in_panel_window(ev)
+        if self._window_event(ev, in_panel):
             return
+        mouse = ev.type in (pg.MOUSEBUTTONDOWN, pg.MOUSEBUTTONUP, pg.MOUSEMOTION, pg.MOUSEWHEEL)
+        if ev.type == pg.MOUSEMOTION:
+            if in_panel:
+                self._panel_mouse = ev.pos
+            else:
+                self._mouse = ev.pos
+        to_panel = self.panel_window is None or in_panel or not mouse
+        if to_panel and self.manager.process_events(ev):
+            return
+        if self._widget_event(ev):
+            return
+        if ev.type == pg.KEYDOWN:
+            self._key(ev)
+        elif mouse and not in_panel:
+            self._mouse_event(ev)
+
+    def _window_event(self, ev: Any, in_panel: bool) -> bool:
+        """Closing a window (the main one: Exit; the panel's: dock it), the pointer
+        leaving the panel's window. True when ``ev`` was one of these."""
+        pg = self.pg
+        if ev.type == pg.WINDOWCLOSE:
+            if in_panel:
+                self.set_panel_window(False)
+            else:
+                self.exit(save=not self.discard_on_close)
+            return True
+        if ev.type == pg.WINDOWLEAVE and in_panel:
+            self._panel_mouse = None
+            return True
+        return False
+
+    def _widget_event(self, ev: Any) -> bool:
+        gui = self.gui
         if ev.type == gui.UI_BUTTON_PRESSED:
             action = self.buttons.get(ev.ui_element)
+            self.manager.set_focus_set(None)
             if action is not None:
                 action()
-            self.manager.set_focus_set(None)
         elif ev.type in (gui.UI_CHECK_BOX_CHECKED, gui.UI_CHECK_BOX_UNCHECKED):
             for name, box in self.checks.items():
                 if box is ev.ui_element:
@@ -582,10 +718,9 @@ class ViewerApp:
         elif ev.type == gui.UI_HORIZONTAL_SLIDER_MOVED and ev.ui_element is self.slider:
             self.speed = slider_to_speed(float(ev.value))
             self.speed_label.set_text(self._speed_text())
-        elif ev.type == pg.KEYDOWN:
-            self._key(ev)
-        elif ev.type in (pg.MOUSEBUTTONDOWN, pg.MOUSEBUTTONUP, pg.MOUSEMOTION, pg.MOUSEWHEEL):
-            self._mouse_event(ev)
+        else:
+            return False
+        return True
 
     def _key(self, ev: Any) -> None:
         pg = self.pg
@@ -601,6 +736,7 @@ class ViewerApp:
             pg.K_a: lambda: self.toggle("auto_rescue"),
             pg.K_c: lambda: self.toggle("clockless"),
             pg.K_f: lambda: self.toggle("follow"),
+            pg.K_p: self.toggle_panel,
             pg.K_RIGHTBRACKET: lambda: self.set_speed(self.speed * 1.5),
             pg.K_LEFTBRACKET: lambda: self.set_speed(self.speed / 1.5),
             pg.K_EQUALS: lambda: self.zoom(1.25),
@@ -633,7 +769,6 @@ class ViewerApp:
             if self._in(self.layout.main, pos):
                 self.zoom(1.15**ev.y, pos)
             return
-        self._mouse = ev.pos
         if ev.type == pg.MOUSEBUTTONDOWN and ev.button == 1:
             if self._in(self.layout.main, ev.pos):
                 self._drag = ev.pos
@@ -698,6 +833,7 @@ class ViewerApp:
         if shot or now - self._last_draw >= interval:
             self._last_draw = now
             self.manager.update(min(0.1, now - self._last_draw_done))
+            self._update_hint()
             self.draw(full=shot)
             self._last_draw_done = time.perf_counter()
             self._draw_cost = self._last_draw_done - now
@@ -725,6 +861,9 @@ class ViewerApp:
         """After the loop: leave as closing the window would (unless Exit already did)."""
         if not self.session.closed:
             self.session.exit(save=not self.discard_on_close)
+        if self.panel_window is not None:
+            self.panel_window.destroy()
+            self.panel_window = None
 
     # -- drawing ---------------------------------------------------------------------------
     def tags(self) -> list[str]:
@@ -746,42 +885,71 @@ class ViewerApp:
         return out
 
     def draw(self, full: bool = True) -> None:
-        """Draw the whole window and flip it. The loop passes ``full=False``: the
-        learning curve is then redrawn at most every :data:`CURVE_INTERVAL` seconds."""
+        """Draw the whole window (and the panel's own window) and flip. The loop passes
+        ``full=False``: the learning curve is then redrawn at most every
+        :data:`CURVE_INTERVAL` seconds."""
+        from . import hud
+
+        pg, screen, lay, st = self.pg, self.screen, self.layout, self.style
+        if self.follow:
+            self._follow_robot()
+        self._draw_views()
+        drawn: dict[str, Any] = {}
+        tag_at = (lay.main[0] + st.pad, lay.main[1] + st.pad)
+        drawn["tags"] = hud.draw_tags(screen, tag_at, self.tags(), st)
+        if self.show_hud:
+            drawn["hud"] = hud.draw_hud(screen, pg.Rect(lay.hud), self.env, st)
+        else:
+            hud.panel(screen, pg.Rect(lay.hud), "HUD hidden [H]", st)
+        if self.show_stats:
+            drawn["stats"] = hud.draw_stats(
+                screen, pg.Rect(lay.stats), self.session, self._rate, st
+            )
+            screen.blit(self._curve(full), lay.curve[:2])
+        else:
+            hud.panel(screen, pg.Rect(lay.stats), "Stats hidden [T]", st)
+            hud.panel(screen, pg.Rect(lay.curve), "", st)
+        if self.panel_window is None:
+            self.manager.draw_ui(screen)
+        if self.help:
+            x, y, w, _ = lay.main
+            rect = pg.Rect(x + 20, y + 10, w - 40, lay.hud[1] + lay.hud[3] - y - 20)
+            drawn["help"] = hud.draw_help(screen, rect, HELP_LINES, st)
+        self.drawn = drawn
+        self.frames_drawn += 1
+        pg.display.flip()
+        if self.panel_window is not None:
+            self.manager.draw_ui(self.panel_surface)
+            self.panel_window.flip()
+
+    def _draw_views(self) -> None:
+        """The overview (long arenas) and the arena view, framed. Without Show Sensors
+        the robot is the paper's plain red in both."""
         from . import hud
         from .render import draw_env
 
         pg, screen, lay = self.pg, self.screen, self.layout
-        if self.follow:
-            self._follow_robot()
-        drawn: dict[str, Any] = {}
         if self.overview_cam is not None:
-            draw_env(screen, self.overview_cam, self.env, lines=False, layer=self._layers[0])
+            draw_env(
+                screen,
+                self.overview_cam,
+                self.env,
+                show_sensors=self.show_sensors,
+                lines=False,
+                layer=self._layers[0],
+                label_size=self.style.px(16),
+            )
             self._draw_view_box()
             pg.draw.rect(screen, hud.PANEL_EDGE, pg.Rect(lay.overview), width=1)
         draw_env(
-            screen, self.camera, self.env, show_sensors=self.show_sensors, layer=self._layers[1]
+            screen,
+            self.camera,
+            self.env,
+            show_sensors=self.show_sensors,
+            layer=self._layers[1],
+            label_size=self.style.px(16),
         )
         pg.draw.rect(screen, hud.PANEL_EDGE, pg.Rect(lay.main), width=1)
-        drawn["tags"] = hud.draw_tags(screen, (lay.main[0] + 8, lay.main[1] + 8), self.tags())
-        if self.show_hud:
-            drawn["hud"] = hud.draw_hud(screen, pg.Rect(lay.hud), self.env)
-        else:
-            hud.panel(screen, pg.Rect(lay.hud), "HUD hidden [H]")
-        if self.show_stats:
-            drawn["stats"] = hud.draw_stats(screen, pg.Rect(lay.stats), self.session, self._rate)
-            screen.blit(self._curve(full), lay.curve[:2])
-        else:
-            hud.panel(screen, pg.Rect(lay.stats), "Stats hidden [T]")
-            hud.panel(screen, pg.Rect(lay.curve), "")
-        self.manager.draw_ui(screen)
-        if self.help:
-            x, y, w, _ = lay.main
-            rect = pg.Rect(x + 20, y + 10, w - 40, lay.hud[1] + lay.hud[3] - y - 20)
-            drawn["help"] = hud.draw_help(screen, rect, HELP_LINES)
-        self.drawn = drawn
-        self.frames_drawn += 1
-        pg.display.flip()
 
     def _draw_view_box(self) -> None:
         """The main view's extent as a rectangle on the overview."""
@@ -802,30 +970,194 @@ class ViewerApp:
 
         pg = self.pg
         st = self.session.stats
-        key = (len(st.returns), st.run_start)
+        _, _, w, h = self.layout.curve
+        key = (len(st.returns), st.run_start, w)
         now = time.perf_counter()
         due = full or now - self._curve_time >= CURVE_INTERVAL
         if self._curve_surf is None or (key != self._curve_key and due):
             self._curve_time = now
-            _, _, w, h = self.layout.curve
             surf = pg.Surface((w, h))
-            hud.draw_curve(surf, pg.Rect(0, 0, w, h), st.returns, st.run_start, CURVE_WINDOW)
+            self.drawn_curve = hud.draw_curve(
+                surf,
+                pg.Rect(0, 0, w, h),
+                st.returns,
+                st.run_start,
+                CURVE_WINDOW,
+                at_goal=st.at_goal,
+                st=self.style,
+            )
             self._curve_surf, self._curve_key = surf, key
         return self._curve_surf
 
+    def panel_image(self) -> Any:
+        """The control panel as drawn (a copy of its surface)."""
+        x, y, w, h = self.panel.rect
+        return self.panel_surface.subsurface(self.pg.Rect(x, y, w, h)).copy()
+
     def save_screenshot(self, path: str | Path) -> Path:
-        """Write the window as a PNG, atomically (temporary file, then rename)."""
+        """Write the window as a PNG, atomically (temporary file, then rename). With the
+        control panel in its own window, the picture shows that window on the right."""
         import io
 
         from ..files import atomic_write
 
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
+        image = self.screen
+        if self.panel_window is not None:
+            panel = self.panel_image()
+            w, h = self.size
+            image = self.pg.Surface((w + 8 + panel.get_width(), max(h, panel.get_height())))
+            image.fill((255, 255, 255))
+            image.blit(self.screen, (0, 0))
+            image.blit(panel, (w + 8, 0))
         buf = io.BytesIO()
-        self.pg.image.save(self.screen, buf, "png")
+        self.pg.image.save(image, buf, "png")
         atomic_write(path, buf.getvalue())
         return path
 
 
-def _short(path: str, limit: int = 30) -> str:
-    return path if len(path) <= limit else "..." + path[-(limit - 3) :]
+class _ControlsBuilder:
+    """Builds the control panel's widgets (pygame-gui) top to bottom, sized by the style."""
+
+    def __init__(self, app: ViewerApp) -> None:
+        self.app, self.pg, self.gui = app, app.pg, app.gui
+        st = app.style
+        self.st = st
+        self.w = app.panel.rect.w - st.px(24)
+        self.y = st.px(8)
+
+    def place(self, height: float = 30, gap: float = 6) -> Any:
+        st = self.st
+        r = self.pg.Rect(st.px(10), self.y, self.w, st.px(height))
+        self.y += st.px(height) + st.px(gap)
+        return r
+
+    def _kw(self) -> dict[str, Any]:
+        return {"manager": self.app.manager, "container": self.app.panel}
+
+    def button(self, label: str, hint: str) -> Any:
+        b = self.gui.elements.UIButton(self.place(), label, **self._kw())
+        self.app.hints[b] = hint
+        return b
+
+    def check(self, label: str, state: bool, hint: str) -> Any:
+        r = self.place(20, 7)
+        box = self.gui.elements.UICheckBox(
+            self.pg.Rect(r.x, r.y, r.h, r.h), label, initial_state=state, **self._kw()
+        )
+        self.app.hints[box] = hint
+        return box
+
+    def label(self, text: str, height: float = 20, gap: float = 0, object_id: str = "") -> Any:
+        return self.gui.elements.UILabel(
+            self.place(height, gap), text, object_id=object_id or None, **self._kw()
+        )
+
+    def build(self) -> None:
+        app = self.app
+        self.label("Koolio controls", 24, 4, "#title")
+        app.b_run = self.button(app._run_label(), "Begin or pause learning.")
+        app.b_step = self.button("Step [N]", "One step while paused.")
+        app.b_rescue = self.button(
+            "Rescue [R]", "Force Rescue_Robot now: random reverses, a random spin."
+        )
+        self.y += self.st.px(4)
+        self._checks()
+        self.y += self.st.px(2)
+        app.speed_label = self.label(app._speed_text(), 22, 2, "#centre")
+        app.slider = self.gui.elements.UIHorizontalSlider(
+            self.place(24, 10),
+            speed_to_slider(app.speed),
+            (0.0, 100.0),
+            click_increment=5,
+            **self._kw(),
+        )
+        app.hints[app.slider] = "Clock speed: steps per second, 1 to 1000 ([ and ])."
+        app._sync_speed_control()
+        self._zoom_row()
+        app.b_help = self.button("Help [F1]", "The keyboard and mouse shortcuts.")
+        app.b_panel = self.button(
+            app._panel_label(),
+            "Put these controls in a window of their own, or back in the main window.",
+        )
+        self.y += self.st.px(6)
+        app.b_exit = self.button(
+            "Exit [Q]", "Fold the unfinished episode into the Q-table, save it, quit."
+        )
+        app.b_exit_nosave = self.button(
+            "Exit Without Save [Shift+Q]",
+            "Discard the unfinished episode: the Q-table file stays as after the last episode.",
+        )
+        self._hint_and_info()
+        app.buttons = {
+            app.b_run: app.toggle_running,
+            app.b_step: app.single_step,
+            app.b_rescue: app.rescue,
+            app.b_zoom_in: lambda: app.zoom(1.25),
+            app.b_zoom_out: lambda: app.zoom(0.8),
+            app.b_fit: app.fit_view,
+            app.b_help: app.toggle_help,
+            app.b_panel: app.toggle_panel,
+            app.b_exit: lambda: app.exit(save=True),
+            app.b_exit_nosave: lambda: app.exit(save=False),
+        }
+
+    def _checks(self) -> None:
+        app = self.app
+        rows = [
+            ("show_sensors", "Show Sensors [S]", "Sensor lines and the robot's state colours."),
+            ("show_hud", "Show HUD [H]", "The encoded readings of the state."),
+            ("show_stats", "Show Stats [T]", "Totals and the learning curve."),
+            ("auto_rescue", "Auto Rescue [A]", "Rescue a robot stuck bumping (the paper's rule)."),
+            ("clockless", "Clockless [C]", "Steps back to back, as fast as they go."),
+            ("follow", "Follow robot [F]", "Keep the robot in the arena view."),
+        ]
+        app.checks = {}
+        for name, label, hint in rows:
+            state = app.auto_rescue if name == "auto_rescue" else getattr(app, name)
+            app.checks[name] = self.check(label, state, hint)
+
+    def _zoom_row(self) -> None:
+        app, st = self.app, self.st
+        third = (self.w - st.px(8)) // 3
+        r = self.place()
+        made = []
+        for i, (label, hint) in enumerate(
+            (
+                ("Zoom -", "Zoom out [-]."),
+                ("Zoom +", "Zoom in [+]."),
+                ("Fit", "Fit the arena [0]."),
+            ),
+        ):
+            rect = self.pg.Rect(r.x + i * (third + st.px(4)), r.y, third, r.h)
+            b = self.gui.elements.UIButton(rect, label, **self._kw())
+            app.hints[b] = hint
+            made.append(b)
+        app.b_zoom_out, app.b_zoom_in, app.b_fit = made
+
+    def _hint_and_info(self) -> None:
+        app, st = self.app, self.st
+        self.y += st.px(4)
+        app.hint_labels = [self.label("", 18, 0, "#hint") for _ in range(3)]
+        app.hint_labels[0].set_text(NO_HINT)
+        self.y += st.px(6)
+        h = app.panel.rect.h
+        for line in app.info_lines():
+            if self.y + st.px(19) > h - 4:
+                break
+            text = _short_to(line, self.w, app.style)
+            self.label(text, 19, 0, "#info")
+
+
+def _short_to(line: str, width: int, st: Any) -> str:
+    """``line`` shortened in its middle with ``...`` to fit ``width`` pixels."""
+    from . import hud
+
+    f = hud.font(st.px(13))
+    if f.size(line)[0] <= width:
+        return line
+    head, _, tail = line.partition(": ")
+    while tail and f.size(f"{head}: ...{tail}")[0] > width:
+        tail = tail[1:]
+    return f"{head}: ...{tail}"

@@ -99,6 +99,7 @@ def draw_arena(
     labels: bool = True,
     robot_radius: float = 10.0,
     show_start: bool = True,
+    label_size: int = 16,
 ) -> None:
     """Draw ``arena`` as given (pass ``arena.to_world()`` for the simulator's frame).
 
@@ -106,7 +107,8 @@ def draw_arena(
     disc of one robot diameter around a marker without one), obstacles, the walls, doors
     with their number plates (room numbers, when ``labels``), the start point, goals as
     dots (the active one larger and darker) and end-of-world markers as orange dots.
-    ``robot_radius`` sizes the default zone discs. Nothing outside the viewport is
+    ``robot_radius`` sizes the default zone discs; ``label_size`` is the room numbers'
+    font size in pixels (the window scales it with its size). Nothing outside the viewport is
     touched except through pygame's clipping of ``surface``.
     """
     clip = surface.get_clip()
@@ -124,7 +126,7 @@ def draw_arena(
                 pygame.draw.polygon(surface, WALL, pts, width=2)
         if len(walls) >= 2:
             pygame.draw.lines(surface, WALL, True, walls, width=3)
-        _draw_doors(surface, arena, camera, labels)
+        _draw_doors(surface, arena, camera, label_size if labels else 0)
         if show_start:
             s = camera.to_screen(arena.start.at)
             pygame.draw.circle(surface, START, s, max(3, camera.scale(3)), width=2)
@@ -165,7 +167,8 @@ def _outward(arena: Arena, a: Point, b: Point) -> tuple[float, float]:
     return nx, ny
 
 
-def _draw_doors(surface: pygame.Surface, arena: Arena, camera: Camera, labels: bool) -> None:
+def _draw_doors(surface: pygame.Surface, arena: Arena, camera: Camera, label_size: int) -> None:
+    """Doors, their plates and (``label_size`` > 0) the room numbers beside the plates."""
     for d in arena.doors:
         pygame.draw.line(
             surface,
@@ -176,9 +179,9 @@ def _draw_doors(surface: pygame.Surface, arena: Arena, camera: Camera, labels: b
         )
         plate = camera.to_screen(d.plate)
         pygame.draw.rect(surface, PLATE_TEXT, pygame.Rect(plate[0] - 3, plate[1] - 3, 6, 6))
-        if not labels:
+        if label_size <= 0:
             continue
-        text = font(16).render(d.name, True, PLATE_TEXT)
+        text = font(label_size).render(d.name, True, PLATE_TEXT)
         nx, ny = _outward(arena, d.a, d.b)
         # Centre of the label: just outside the wall, beside the plate (screen y is down).
         off = 4 + max(text.get_width(), text.get_height()) / 2.0
@@ -206,10 +209,6 @@ def text(s: str, size: int = 18, colour: Color = (20, 20, 20)) -> pygame.Surface
 
 
 # -- robot and sensors -------------------------------------------------------------------
-ROBOT_PLAIN: Color = (60, 90, 150)
-"""The robot when Show Sensors is off (no state colouring)."""
-
-
 def robot_state(event: str | None, bump: bool) -> str:
     """The paper's colour state: ``goal`` > ``end_of_world`` > ``bump`` > ``normal``.
 

@@ -20,7 +20,7 @@ from ..world import ACTION_NAMES
 from .camera import Camera
 from .draw import (
     BACKGROUND,
-    ROBOT_PLAIN,
+    ROBOT_NORMAL,
     ROBOT_STATES,
     draw_arena,
     draw_robot,
@@ -49,16 +49,14 @@ def draw_env(
     labels: bool = True,
     lines: bool = True,
     layer: ArenaLayer | None = None,
+    label_size: int = 16,
 ) -> None:
     """Arena, then (with ``show_sensors``) the sensor lines, then the robot, in the
     camera's viewport. With ``show_sensors`` the robot has the paper's state colour (and
     ``lines=False`` leaves the sensor lines out, for a small overview); without it the
-    robot is drawn plain blue. With a ``layer`` the arena comes from its cache."""
-    radius = env.config.robot.radius
-    if layer is not None:
-        layer.draw(surface, env.world_arena, camera, labels=labels, robot_radius=radius)
-    else:
-        draw_arena(surface, env.world_arena, camera, labels=labels, robot_radius=radius)
+    robot is the paper's plain red. With a ``layer`` the arena comes from its cache."""
+    kw = {"labels": labels, "robot_radius": env.config.robot.radius, "label_size": label_size}
+    (layer.draw if layer is not None else draw_arena)(surface, env.world_arena, camera, **kw)
     clip = surface.get_clip()
     surface.set_clip(pygame.Rect(camera.viewport))
     pose = env.world.pose(0)
@@ -67,7 +65,7 @@ def draw_env(
             draw_sensors(surface, camera, pose, env.sensors, env.readings)
         colour = robot_colour(env)
     else:
-        colour = ROBOT_PLAIN
+        colour = ROBOT_NORMAL
     draw_robot(surface, camera, pose, env.config.robot.radius, colour)
     surface.set_clip(clip)
 
@@ -99,14 +97,22 @@ class ArenaLayer:
         *,
         labels: bool = True,
         robot_radius: float = 10.0,
+        label_size: int = 16,
     ) -> None:
-        key = (camera.zoom, labels, robot_radius)
+        key = (camera.zoom, labels, robot_radius, label_size)
         if key != self._key or arena is not self._arena:
-            self._build(arena, camera.zoom, labels, robot_radius)
+            self._build(arena, camera.zoom, key)
             self._key, self._arena = key, arena
         view = pygame.Rect(camera.viewport)
         if self._surface is None or self._camera is None:
-            draw_arena(surface, arena, camera, labels=labels, robot_radius=robot_radius)
+            draw_arena(
+                surface,
+                arena,
+                camera,
+                labels=labels,
+                robot_radius=robot_radius,
+                label_size=label_size,
+            )
             return
         clip = surface.get_clip()
         surface.set_clip(view)
@@ -116,7 +122,8 @@ class ArenaLayer:
         surface.blit(self._surface, (cx - w // 2, cy - h // 2))
         surface.set_clip(clip)
 
-    def _build(self, arena, zoom: float, labels: bool, robot_radius: float) -> None:
+    def _build(self, arena, zoom: float, key: tuple) -> None:
+        _, labels, robot_radius, label_size = key
         xmin, ymin, xmax, ymax = arena.bounds()
         margin = max(4.0 * robot_radius, 48.0 / zoom)  # zone discs, outside labels
         w = 2 * (round((xmax - xmin + 2 * margin) * zoom) // 2 + 1)
@@ -127,7 +134,14 @@ class ArenaLayer:
         self._camera = Camera((0, 0, w, h), ((xmin + xmax) / 2.0, (ymin + ymax) / 2.0), zoom)
         self._camera.min_zoom = self._camera.max_zoom = zoom
         self._surface = pygame.Surface((w, h))
-        draw_arena(self._surface, arena, self._camera, labels=labels, robot_radius=robot_radius)
+        draw_arena(
+            self._surface,
+            arena,
+            self._camera,
+            labels=labels,
+            robot_radius=robot_radius,
+            label_size=label_size,
+        )
 
 
 def arena_bounds(env: KoolioEnv) -> tuple[float, float, float, float]:

@@ -56,6 +56,8 @@ class Stats:
     bumps_sum: int = 0
     returns: list[float] = field(default_factory=list)
     """Return of every finished episode: earlier ones from the log, then this session's."""
+    at_goal: list[bool] = field(default_factory=list)
+    """Whether each episode of :attr:`returns` ended at the goal."""
     run_start: int = 0
     """Index in ``returns`` of this session's first episode."""
 
@@ -66,6 +68,7 @@ class Stats:
         self.steps_sum += r.steps
         self.bumps_sum += r.bumps
         self.returns.append(r.reward)
+        self.at_goal.append(r.outcome == "goal")
 
     def mean(self, total: float) -> float:
         return total / self.episodes if self.episodes else math.nan
@@ -80,10 +83,18 @@ def read_returns(path: str | Path) -> list[float]:
 
     A missing or empty file gives ``[]``; a malformed one raises :class:`KoolioError`.
     """
+    return read_history(path)[0]
+
+
+def read_history(path: str | Path) -> tuple[list[float], list[bool]]:
+    """Return of each finished episode of a training log, and whether it ended at the goal
+    (``interrupted`` rows skipped). A missing or empty file gives ``([], [])``; a
+    malformed one raises :class:`KoolioError`."""
     p = Path(path)
     if not p.exists() or p.stat().st_size == 0:
-        return []
+        return [], []
     out: list[float] = []
+    goal: list[bool] = []
     with p.open(newline="", encoding="utf-8") as fh:
         for line, row in enumerate(csv.DictReader(fh), start=2):
             if row.get("outcome") == "interrupted":
@@ -92,7 +103,8 @@ def read_returns(path: str | Path) -> list[float]:
                 out.append(float(row["reward"]))
             except (KeyError, TypeError, ValueError):
                 raise KoolioError(located(str(p), f"line {line}", "reward: not a number")) from None
-    return out
+            goal.append(row.get("outcome") == "goal")
+    return out, goal
 
 
 class Session:
@@ -115,6 +127,8 @@ class Session:
         self.env = env
         self.seed = seed
         self.learn = not greedy
+        self.table_path = Path(qtable)
+        """The Q-table file (written while learning, only read with ``greedy``)."""
         cfg = env.config
         self.store: QTableStore | None = None
         if self.learn:
@@ -132,7 +146,7 @@ class Session:
         self.log = LogWriter(log if self.learn else None)
         self.stats = Stats()
         if self.learn and log:
-            self.stats.returns = read_returns(log)
+            self.stats.returns, self.stats.at_goal = read_history(log)
             self.stats.run_start = len(self.stats.returns)
         self.agent = QLearner(self.table, cfg.learner, np.random.default_rng(seed))
         self.episode = self.first
