@@ -193,6 +193,35 @@ def _first_alpha(
 
 
 @numba.njit(cache=True)
+def _first_hit(
+    x: float, y: float, dx: float, dy: float, walls: np.ndarray, active: np.ndarray, n: int
+) -> tuple[float, int]:
+    """:func:`_first_alpha` and the wall it hits (-1: none)."""
+    best = 1.0
+    best_k = -1
+    for j in range(n):
+        k = active[j]
+        ax = walls[k, 0]
+        ay = walls[k, 1]
+        nx = walls[k, 4]
+        ny = walls[k, 5]
+        d = (ax - x) * nx + (ay - y) * ny
+        sax = ax - x
+        say = ay - y
+        sbx = walls[k, 2] - x
+        sby = walls[k, 3] - y
+        if (dx * say - dy * sax) * (dx * sby - dy * sbx) <= 0.0:
+            ad = -d
+            bd = (dx * nx + dy * ny) - d
+            if ad * bd < 0.0:
+                t = ad / (ad - bd)
+                if t < best:
+                    best = t
+                    best_k = k
+    return best, best_k
+
+
+@numba.njit(cache=True)
 def _walls_in_box(
     x0: float,
     y0: float,
@@ -352,15 +381,22 @@ def sense_one(
     rays: np.ndarray,
     eow_k: np.ndarray,
     trig: np.ndarray,
+    plates: np.ndarray,
+    ray_cos: np.ndarray,
+    decoy: np.ndarray,
 ) -> None:
     """One noise-free reading of every sensor of a robot at ``(x, y, h)``.
 
     ``params`` = ``[ray_length, radius, really_long_distance, camera_half_arc,
-    sonar_model, sonar_half_arc]``; ``sonar_model`` 0 is the paper's sub-arc rays, 1 the
-    exact cone (:func:`cone_nearest` around the mean of each sonar's ray offsets).
-    Writes ``raw`` = sonar edge distances, goal per camera, end-of-world per camera,
-    compass units (what ``SensorSuite`` noises next), ``rays`` = every sub-arc ray's
-    centre distance and ``eow_k`` = the marker each camera sees (-1: none).
+    sonar_model, sonar_half_arc, incidence]``; ``sonar_model`` 0 is the paper's sub-arc
+    rays, 1 the exact cone (:func:`cone_nearest` around the mean of each sonar's ray
+    offsets). Writes ``raw`` = sonar edge distances, goal per camera, end-of-world per
+    camera, compass units (what ``SensorSuite`` noises next), ``rays`` = every sub-arc
+    ray's centre distance and ``eow_k`` = the marker each camera sees (-1: none).
+    For the realism models (:mod:`koolio_pymunk.realism`): with ``incidence`` 1 also
+    ``ray_cos`` = the cosine of each ray's incidence on the wall it hits (0: no hit), and
+    with ``plates`` not empty ``decoy`` = per camera the nearest of ``plates`` (the other
+    doors' plates) in its arc and in sight (far: none).
     ``trig`` (:func:`new_trig`) caches every ray's ``cos`` and ``sin`` for the last few
     headings: moves and stops keep the heading and turns often come back to one, so few
     readings pay for the trigonometry (the values are the same either way).
@@ -377,7 +413,11 @@ def sense_one(
         _sense_cones(x, y, h, ray_offsets, params, walls, near, n_near, raw, rays)
     else:
         directions = _ray_directions(h, ray_offsets, trig)
-        _sense_sub_arcs(x, y, ray_offsets, params, walls, near, n_near, raw, rays, directions)
+        if params[6] == 1.0:
+            _sense_incidence(x, y, ray_offsets, params, walls, near, n_near, raw, rays, directions,
+                             ray_cos)  # fmt: skip
+        else:
+            _sense_sub_arcs(x, y, ray_offsets, params, walls, near, n_near, raw, rays, directions)
     goal2 = goal.reshape(1, 2)
     for c in range(n_cam):
         direction = h + camera_dirs[c]
@@ -385,6 +425,8 @@ def sense_one(
         d, k = _camera(x, y, direction, markers, half_arc, radius, far, walls)
         raw[n_sonar + n_cam + c] = d
         eow_k[c] = k
+        if plates.shape[0] > 0:
+            decoy[c] = _camera(x, y, direction, plates, half_arc, radius, far, walls)[0]
     raw[n_sonar + 2 * n_cam] = (h / TWO_PI) * 256.0
 
 
@@ -475,6 +517,55 @@ def _sense_sub_arcs(
 
 
 @numba.njit(cache=True)
+def _sense_incidence(
+    x: float,
+    y: float,
+    ray_offsets: np.ndarray,
+    params: np.ndarray,
+    walls: np.ndarray,
+    near: np.ndarray,
+    n_near: int,
+    raw: np.ndarray,
+    rays: np.ndarray,
+    trig: np.ndarray,
+    ray_cos: np.ndarray,
+) -> None:
+    """:func:`_sense_sub_arcs` that also records each ray's incidence cosine
+    ``|cos(angle) * nx + sin(angle) * ny|`` on the wall it hits (its unit normal)."""
+    length, radius, far = params[0], params[1], params[2]
+    n_sonar, n_sub = ray_offsets.shape
+    n_rays = n_sonar * n_sub
+    active = np.empty(walls.shape[0], np.int64)
+    ends = np.empty((n_sub, 2))
+    for s in range(n_sonar):
+        x0 = x1 = x
+        y0 = y1 = y
+        for i in range(n_sub):
+            ex = x + length * trig[1 + s * n_sub + i]
+            ey = y + length * trig[1 + n_rays + s * n_sub + i]
+            ends[i, 0] = ex
+            ends[i, 1] = ey
+            x0 = min(x0, ex)
+            x1 = max(x1, ex)
+            y0 = min(y0, ey)
+            y1 = max(y1, ey)
+        n = _walls_in_box(x0, y0, x1, y1, walls, near, n_near, active)
+        nearest = np.inf
+        for i in range(n_sub):
+            alpha, k = _first_hit(x, y, ends[i, 0] - x, ends[i, 1] - y, walls, active, n)
+            d = alpha * length
+            rays[s, i] = d
+            nearest = min(nearest, d)
+            if k >= 0:
+                c = trig[1 + s * n_sub + i]
+                sn = trig[1 + n_rays + s * n_sub + i]
+                ray_cos[s, i] = abs(c * walls[k, 4] + sn * walls[k, 5])
+            else:
+                ray_cos[s, i] = 0.0
+        raw[s] = far if nearest > length - 1e-9 else nearest - radius
+
+
+@numba.njit(cache=True)
 def sense_batch(
     xs: np.ndarray,
     ys: np.ndarray,
@@ -491,7 +582,11 @@ def sense_batch(
     trig: np.ndarray,
 ) -> None:
     """:func:`sense_one` for robot ``r`` at ``(xs[r], ys[r], hs[r])`` with goal
-    ``goals[r]``, writing row ``r`` of ``raw``, ``rays``, ``eow_k`` and ``trig``."""
+    ``goals[r]``, writing row ``r`` of ``raw``, ``rays``, ``eow_k`` and ``trig`` (the
+    ideal world: ``params[6]`` must be 0, no plates)."""
+    no_plates = np.empty((0, 2))
+    no_cos = np.empty((0, 0))
+    no_decoy = np.empty(0)
     for r in range(xs.shape[0]):
         sense_one(
             xs[r],
@@ -507,6 +602,9 @@ def sense_batch(
             rays[r],
             eow_k[r],
             trig[r],
+            no_plates,
+            no_cos,
+            no_decoy,
         )
 
 
@@ -532,6 +630,24 @@ class PymunkRays:
             if hit is not None:
                 out[idx] = hit.alpha * length
         return out
+
+    def cast_incidence(
+        self, x: float, y: float, angles: np.ndarray, length: float
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`cast` and each ray's incidence cosine ``|cos(a) nx + sin(a) ny|`` on the
+        wall it hits, with pymunk's reported normal (0 where nothing is hit)."""
+        cos_a, sin_a = np.cos(angles), np.sin(angles)
+        ends_x = x + length * cos_a
+        ends_y = y + length * sin_a
+        query = self.world.space.segment_query_first
+        out = np.full(angles.shape, length)
+        inc = np.zeros(angles.shape)
+        for idx in np.ndindex(angles.shape):
+            hit = query((x, y), (float(ends_x[idx]), float(ends_y[idx])), 0.0, WALL_ONLY)
+            if hit is not None:
+                out[idx] = hit.alpha * length
+                inc[idx] = abs(cos_a[idx] * hit.normal.x + sin_a[idx] * hit.normal.y)
+        return out, inc
 
     def line_of_sight(self, x: float, y: float, tx: float, ty: float) -> bool:
         dist = math.hypot(tx - x, ty - y)
