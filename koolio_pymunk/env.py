@@ -22,6 +22,10 @@ from .rules import TERMS, Judgement, judge
 from .sensors import Readings, SensorSuite
 from .world import ACTION_NAMES, Action, World
 
+#: The event of a Stop in front of a misread plate (realism ``camera.misread``): the robot
+#: believes it delivered (the goal reward, the episode ends) at another door.
+WRONG_DOOR = "wrong_door"
+
 
 class EndZones:
     """End-of-world zones: polygons, or discs of one robot diameter around a marker."""
@@ -76,8 +80,11 @@ class KoolioEnv(gym.Env):
     reverse / turn / forward by action. ``info["reward_terms"]`` names them.
 
     **Episode end.** ``terminated`` at the goal or in an end-of-world zone; ``truncated``
-    after ``episode.max_steps`` steps. Each episode starts at the arena's start point with
-    a uniformly random heading unless the arena fixes it (exploring starts).
+    after ``episode.max_steps`` steps. With the misread-plate model on, a Stop whose
+    front camera reads another door's plate as the goal Close gets the goal reward and
+    ends the episode as the robot would, but its event is ``wrong_door``, not ``goal``.
+    Each episode starts at the arena's start point with a uniformly random heading
+    unless the arena fixes it (exploring starts).
 
     **Rescue.** With ``rescue.auto_rescue_toggle`` on, a bumping robot past
     ``max_steps_before_rescue`` steps is rescued with probability ``rescue_chance``
@@ -239,6 +246,8 @@ class KoolioEnv(gym.Env):
         bump, goal_close = self._sense()
         x, y, _ = self._pose
         j = judge(action, goal_close, self.zones.contains(x, y), bump, self.config.rewards)
+        if j.event == "goal" and self.sensors.goal_misread():
+            j = Judgement(WRONG_DOOR, j.reward, True, j.terms)
         self.steps += 1
         self.bumps += int(bump)
         self.episode_reward += j.reward

@@ -479,7 +479,7 @@ def apply_reference(
         for s in range(n):
             if f[F_BEAM]:
                 z[s] = _beam(float(z[s]), draws[4 * s : 4 * s + 3], p)
-            if z[s] < far and z[s] < p[P_MIN_RANGE]:
+            if p[P_MIN_RANGE] > 0.0 and z[s] < p[P_MIN_RANGE]:
                 z[s] = p[P_MIN_RANGE]
         out[:n] = z
     missed = np.zeros((m, 2), np.bool_)

@@ -5,6 +5,10 @@
 what the reference does (echo of every sub-arc ray, crosstalk, the four-part beam model,
 the minimum range, misread plates and missed detections), so both give the same
 readings bit for bit; ``tests/test_realism.py`` and ``tools/agreement.py`` check it.
+:func:`sense_realism` is the learner's hot path in a realistic world: the sensing kernel
+(:func:`raycast.sense_one`), the models and the read-out (:func:`readout.readout`) in
+one call, finding the other plates in view only for a camera whose misread draw fired
+(the reference finds them for every camera; only those are used).
 The parameter layout (``params``, ``flags``) is :class:`koolio_pymunk.realism.SensorRealism`'s.
 """
 
@@ -15,6 +19,8 @@ import math
 import numba
 import numpy as np
 
+from .raycast import _camera, sense_one
+from .readout import readout
 from .realism import (
     F_BEAM,
     F_CAMERA,
@@ -123,7 +129,7 @@ def _sonar(
         v = z[s]
         if f[F_BEAM]:
             v = _beam(v, draws[4 * s], draws[4 * s + 1], draws[4 * s + 2], p)
-        if v < far and v < p[P_MIN_RANGE]:
+        if p[P_MIN_RANGE] > 0.0 and v < p[P_MIN_RANGE]:
             v = p[P_MIN_RANGE]
         raw[s] = v
 
@@ -190,3 +196,74 @@ def apply_realism(
     n = rays.shape[0]
     _sonar(raw, rays, ray_cos, draws, params, flags, neighbours, echo, crossed)
     _cameras(raw, n, decoy, draws, params, flags, missed, misread)
+
+
+@numba.njit(cache=True)
+def sense_realism(
+    x: float,
+    y: float,
+    h: float,
+    ray_offsets: np.ndarray,
+    params: np.ndarray,
+    camera_dirs: np.ndarray,
+    goal: np.ndarray,
+    markers: np.ndarray,
+    walls: np.ndarray,
+    raw: np.ndarray,
+    rays: np.ndarray,
+    eow_k: np.ndarray,
+    trig: np.ndarray,
+    ray_cos: np.ndarray,
+    decoy: np.ndarray,
+    plates: np.ndarray,
+    noise: np.ndarray,
+    u: np.ndarray,
+    noise_from_u: bool,
+    rparams: np.ndarray,
+    rflags: np.ndarray,
+    neighbours: np.ndarray,
+    echo: np.ndarray,
+    crossed: np.ndarray,
+    missed: np.ndarray,
+    misread: np.ndarray,
+    fracs: np.ndarray,
+    n_sonar: int,
+    limits: np.ndarray,
+    sonar_thresholds: np.ndarray,
+    camera_thresholds: np.ndarray,
+    group_members: np.ndarray,
+    group_sizes: np.ndarray,
+    bits: np.ndarray,
+    compass_in_state: bool,
+    out: np.ndarray,
+    codes: np.ndarray,
+) -> tuple[int, bool, bool]:
+    """One reading in a realistic world: ``(state_key, bump, goal_close)``.
+
+    :func:`raycast.sense_one` (without other plates), then, per camera whose misread
+    draw ``u[4 n + 3 c] < misread``, the nearest of ``plates`` in its arc and in sight
+    (``decoy``; far for the others), :func:`apply_realism` with the uniforms ``u``, and
+    :func:`readout.readout` with the noise draws ``noise``. With ``noise_from_u`` (the
+    uniform noise model) ``u`` holds both, from one generator call: first the readings'
+    uniforms, turned into ``noise`` as ``rng.uniform(-1, 1)`` turns them (``-1 + 2 u``),
+    then the realism uniforms."""
+    m = raw.shape[0]
+    if noise_from_u:
+        for i in range(m):
+            noise[i] = -1.0 + 2.0 * u[i]
+        u = u[m:]
+    no_plates = plates[:0]
+    sense_one(x, y, h, ray_offsets, params, camera_dirs, goal, markers, walls, raw, rays,
+              eow_k, trig, no_plates, ray_cos, decoy)  # fmt: skip
+    far = params[2]
+    for c in range(camera_dirs.shape[0]):
+        decoy[c] = far
+        if rflags[F_MISREAD] and u[4 * n_sonar + 3 * c] < rparams[P_MISREAD]:
+            direction = h + camera_dirs[c]
+            decoy[c] = _camera(x, y, direction, plates, params[3], params[1], far, walls)[0]
+    apply_realism(raw, rays, ray_cos, decoy, u, rparams, rflags, neighbours, echo, crossed,
+                  missed, misread)  # fmt: skip
+    # fmt: off
+    return readout(raw, noise, fracs, n_sonar, limits, sonar_thresholds, camera_thresholds,
+                   group_members, group_sizes, bits, compass_in_state, out, eow_k, codes)
+    # fmt: on

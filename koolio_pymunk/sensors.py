@@ -58,7 +58,7 @@ from .errors import ConfigError
 from .raycast import make_engine, new_trig, sense_one
 from .readout import compass_code, readout, wrap_compass
 from .realism import RealismConfig, SensorRealism, apply_reference
-from .realism_kernel import apply_realism
+from .realism_kernel import sense_realism
 from .world import World
 
 #: Codes of the sonar intervals (Table 6) and camera intervals (Table 7).
@@ -306,6 +306,15 @@ class SensorSuite:
             codes.append(compass_code(r.compass))
         return tuple(codes)
 
+    def goal_misread(self) -> bool:
+        """The front camera's goal reading of the last :meth:`sense` is another door's
+        plate (the realism misread model)."""
+        if not self.realism.misread:
+            return False
+        if self.fused:
+            return bool(self._kernel.misread[0])
+        return bool(self.last()[0].misread[0])
+
     def bump(self, r: Readings) -> bool:
         """True when any single sonar reads Bump (paper: the Bump reward and pink robot)."""
         return bool((r.sonar < self.sonar_thresholds[0]).any())
@@ -454,12 +463,22 @@ class KernelInputs:
     def configure_realism(self) -> None:
         """Follow the suite's realism models: ray incidence on or off, the plates the
         cameras may misread (none when the misread model is off: nothing to compute)."""
-        real = self.suite.realism
+        s, real = self.suite, self.suite.realism
         self.real_on = real.on
         self.params[6] = 1.0 if real.incidence else 0.0
-        plates = self.suite.plates if real.misread else []
+        plates = s.plates if real.misread else []
         self.plates = np.array(plates, dtype=np.float64).reshape(-1, 2)
-        self.decoy[:] = self.suite.far
+        self.decoy[:] = s.far
+        self.noise = np.zeros(self.n_raw)
+        self._geometry_args = (self.ray_offsets, self.params, self.camera_dirs, self.goal,
+                               self.markers, self.walls, self.raw, self.rays, self.eow_k,
+                               self.trig, self.ray_cos, self.decoy, self.plates)  # fmt: skip
+        self._realism_args = (
+            real.params, real.flags, real.neighbours, self.echo, self.crossed, self.missed,
+            self.misread, self.fracs, s.n_sonar, self.limits, s.sonar_thresholds,
+            s.camera_thresholds, self.group_members, self.group_sizes, self.bits,
+            self.compass_in_state, self.out, self.codes,
+        )  # fmt: skip
 
     def key(self, codes: Sequence[int]) -> int:
         """The state key of ``codes`` (same as ``KeywordLayout.state_key``)."""
@@ -503,27 +522,13 @@ class KernelInputs:
     ) -> tuple[int, bool, bool]:
         x, y, h = pose
         self.pose = pose
+        if self.real_on:
+            return self._sense_realism(x, y, h, rng)
         self.sense(x, y, h, self.raw, self.rays, self.eow_k)
         if self.gaussian:
             draws = rng.standard_normal(self.n_raw)
         else:
             draws = rng.uniform(-1.0, 1.0, self.n_raw)  # as draw_noise, one call less
-        if self.real_on:
-            real = self.suite.realism
-            apply_realism(
-                self.raw,
-                self.rays,
-                self.ray_cos,
-                self.decoy,
-                rng.random(real.n_draws),
-                real.params,
-                real.flags,
-                real.neighbours,
-                self.echo,
-                self.crossed,
-                self.missed,
-                self.misread,
-            )
         return readout(
             self.raw,
             draws,
@@ -540,6 +545,21 @@ class KernelInputs:
             self.eow_k,
             self.codes,
         )
+
+    def _sense_realism(
+        self, x: float, y: float, h: float, rng: np.random.Generator
+    ) -> tuple[int, bool, bool]:
+        """:meth:`sense_readout` with realism models on: one compiled call
+        (:func:`realism_kernel.sense_realism`); the same draws as the reference (with
+        uniform noise, its two calls as one: the generator's stream is the same)."""
+        n_draws = self.suite.realism.n_draws
+        if self.gaussian:
+            self.noise = rng.standard_normal(self.n_raw)
+            u = rng.random(n_draws)
+        else:
+            u = rng.random(self.n_raw + n_draws)
+        return sense_realism(float(x), float(y), float(h), *self._geometry_args, self.noise,
+                             u, not self.gaussian, *self._realism_args)  # fmt: skip
 
     def last_readings(self) -> tuple[Readings, tuple[int, ...]]:
         """:class:`Readings` and codes of the last :meth:`sense_readout` (copies)."""
