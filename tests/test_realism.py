@@ -445,7 +445,7 @@ def test_unknown_world_profile_is_one_line_exit_2(capsys) -> None:
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [
         "koolio-pm: error: koolio-rael: no such profile (did you mean 'koolio-real'?) "
-        "(profiles: koolio-real, paper; a file name ends in .yaml)"
+        "(profiles: koolio-real, koolio-real-dr, paper; a file name ends in .yaml)"
     ]
     with pytest.raises(ConfigError):
         load_config(world="koolio-rael")
@@ -478,3 +478,11 @@ def test_stop_at_a_misread_plate_is_a_wrong_door(tmp_path) -> None:
     ideal.reset(seed=0)
     ideal.world.place(0, (210.0, 58.0), math.pi / 2)
     assert ideal.transition(0)[1:3] == (-5.0, False)  # the ideal camera sees no goal there
+
+
+def test_domain_randomization_profile_is_koolio_real_plus_ranges() -> None:
+    real = load_config(world="koolio-real").realism
+    dr = load_config(world="koolio-real-dr").realism
+    assert dr.randomize and not real.randomize
+    dr.randomize = {}
+    assert dr == real
