@@ -69,7 +69,6 @@ import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
@@ -640,7 +639,3 @@ class Randomizer:
         values = rng.uniform(self.lows, self.highs)
         drawn = {k: float(v) for k, v in zip(self.keys, values)}
         return with_values(self.base, drawn), drawn
-
-
-def as_dict(cfg: RealismConfig) -> dict[str, Any]:
-    return dataclasses.asdict(cfg)

@@ -486,3 +486,25 @@ def test_domain_randomization_profile_is_koolio_real_plus_ranges() -> None:
     assert dr.randomize and not real.randomize
     dr.randomize = {}
     assert dr == real
+
+
+def test_robot_runtime_encodes_the_realistic_readings_as_the_simulator(tmp_path) -> None:
+    """What ``env.readings`` hands a driver (sonar, goal, eow) gives the runtime the
+    simulator's own state at every step of a koolio-real episode (the transfer
+    experiment runs the runtime on these readings)."""
+    from koolio_pymunk import robot_runtime as rt
+    from koolio_pymunk.export import policy_document
+    from koolio_pymunk.qtable import load_qtable
+
+    cfg = Config()
+    cfg.episode.max_steps = 60
+    env = KoolioEnv("hallway", config=cfg, world="koolio-real")
+    store = QTableStore(tmp_path / "t.qtable")
+    train(env, store, 1, seed=0, report=None)
+    policy = rt.Policy(policy_document(load_qtable(store.path)))
+    env.reset(seed=7)
+    rng = np.random.default_rng(7)
+    for _ in range(60):
+        env.transition(int(rng.integers(5)))
+        r = env.readings
+        assert policy.encode(r.sonar.tolist(), r.goal.tolist(), r.eow.tolist()) == env.codes
