@@ -165,38 +165,12 @@ def hypot(dx: float, dy: float) -> float:
 
 
 @numba.njit(cache=True)
-def _first_alpha(
-    x: float, y: float, dx: float, dy: float, walls: np.ndarray, active: np.ndarray, n: int
-) -> float:
-    """Smallest hit fraction ``alpha < 1`` of the ray ``(x, y) + alpha * (dx, dy)`` over
-    walls ``active[:n]``; 1.0 when none is hit. Chipmunk's radius-0 segment query."""
-    best = 1.0
-    for j in range(n):
-        k = active[j]
-        ax = walls[k, 0]
-        ay = walls[k, 1]
-        nx = walls[k, 4]
-        ny = walls[k, 5]
-        d = (ax - x) * nx + (ay - y) * ny
-        sax = ax - x
-        say = ay - y
-        sbx = walls[k, 2] - x
-        sby = walls[k, 3] - y
-        if (dx * say - dy * sax) * (dx * sby - dy * sbx) <= 0.0:
-            ad = -d
-            bd = (dx * nx + dy * ny) - d
-            if ad * bd < 0.0:
-                t = ad / (ad - bd)
-                if t < best:
-                    best = t
-    return best
-
-
-@numba.njit(cache=True)
 def _first_hit(
     x: float, y: float, dx: float, dy: float, walls: np.ndarray, active: np.ndarray, n: int
 ) -> tuple[float, int]:
-    """:func:`_first_alpha` and the wall it hits (-1: none)."""
+    """Smallest hit fraction ``alpha < 1`` of the ray ``(x, y) + alpha * (dx, dy)`` over
+    walls ``active[:n]`` and the wall hit (1.0 and -1 when none is hit). Chipmunk's
+    radius-0 segment query."""
     best = 1.0
     best_k = -1
     for j in range(n):
@@ -219,6 +193,14 @@ def _first_hit(
                     best = t
                     best_k = k
     return best, best_k
+
+
+@numba.njit(cache=True)
+def _first_alpha(
+    x: float, y: float, dx: float, dy: float, walls: np.ndarray, active: np.ndarray, n: int
+) -> float:
+    """The hit fraction of :func:`_first_hit` (1.0 when none is hit)."""
+    return _first_hit(x, y, dx, dy, walls, active, n)[0]
 
 
 @numba.njit(cache=True)
@@ -413,11 +395,8 @@ def sense_one(
         _sense_cones(x, y, h, ray_offsets, params, walls, near, n_near, raw, rays)
     else:
         directions = _ray_directions(h, ray_offsets, trig)
-        if params[6] == 1.0:
-            _sense_incidence(x, y, ray_offsets, params, walls, near, n_near, raw, rays, directions,
-                             ray_cos)  # fmt: skip
-        else:
-            _sense_sub_arcs(x, y, ray_offsets, params, walls, near, n_near, raw, rays, directions)
+        _sense_sub_arcs(x, y, ray_offsets, params, walls, near, n_near, raw, rays, directions,
+                        ray_cos)  # fmt: skip
     goal2 = goal.reshape(1, 2)
     for c in range(n_cam):
         direction = h + camera_dirs[c]
@@ -487,52 +466,14 @@ def _sense_sub_arcs(
     raw: np.ndarray,
     rays: np.ndarray,
     trig: np.ndarray,
-) -> None:
-    """The paper's model: the nearest hit over each sonar's sub-arc rays (``trig``: one
-    cache row of :func:`_ray_directions`)."""
-    length, radius, far = params[0], params[1], params[2]
-    n_sonar, n_sub = ray_offsets.shape
-    n_rays = n_sonar * n_sub
-    active = np.empty(walls.shape[0], np.int64)
-    ends = np.empty((n_sub, 2))
-    for s in range(n_sonar):
-        x0 = x1 = x
-        y0 = y1 = y
-        for i in range(n_sub):
-            ex = x + length * trig[1 + s * n_sub + i]
-            ey = y + length * trig[1 + n_rays + s * n_sub + i]
-            ends[i, 0] = ex
-            ends[i, 1] = ey
-            x0 = min(x0, ex)
-            x1 = max(x1, ex)
-            y0 = min(y0, ey)
-            y1 = max(y1, ey)
-        n = _walls_in_box(x0, y0, x1, y1, walls, near, n_near, active)
-        nearest = np.inf
-        for i in range(n_sub):
-            d = _first_alpha(x, y, ends[i, 0] - x, ends[i, 1] - y, walls, active, n) * length
-            rays[s, i] = d
-            nearest = min(nearest, d)
-        raw[s] = far if nearest > length - 1e-9 else nearest - radius
-
-
-@numba.njit(cache=True)
-def _sense_incidence(
-    x: float,
-    y: float,
-    ray_offsets: np.ndarray,
-    params: np.ndarray,
-    walls: np.ndarray,
-    near: np.ndarray,
-    n_near: int,
-    raw: np.ndarray,
-    rays: np.ndarray,
-    trig: np.ndarray,
     ray_cos: np.ndarray,
 ) -> None:
-    """:func:`_sense_sub_arcs` that also records each ray's incidence cosine
-    ``|cos(angle) * nx + sin(angle) * ny|`` on the wall it hits (its unit normal)."""
+    """The paper's model: the nearest hit over each sonar's sub-arc rays (``trig``: one
+    cache row of :func:`_ray_directions`). With ``params[6]`` 1 (the realism incidence
+    model) also each ray's incidence cosine ``|cos(angle) nx + sin(angle) ny|`` on the
+    wall it hits (its unit normal; 0 when nothing is hit) in ``ray_cos``."""
     length, radius, far = params[0], params[1], params[2]
+    incidence = params[6] == 1.0
     n_sonar, n_sub = ray_offsets.shape
     n_rays = n_sonar * n_sub
     active = np.empty(walls.shape[0], np.int64)
@@ -556,12 +497,10 @@ def _sense_incidence(
             d = alpha * length
             rays[s, i] = d
             nearest = min(nearest, d)
-            if k >= 0:
+            if incidence:
                 c = trig[1 + s * n_sub + i]
                 sn = trig[1 + n_rays + s * n_sub + i]
-                ray_cos[s, i] = abs(c * walls[k, 4] + sn * walls[k, 5])
-            else:
-                ray_cos[s, i] = 0.0
+                ray_cos[s, i] = abs(c * walls[k, 4] + sn * walls[k, 5]) if k >= 0 else 0.0
         raw[s] = far if nearest > length - 1e-9 else nearest - radius
 
 
