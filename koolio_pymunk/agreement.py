@@ -9,7 +9,12 @@ uniform heading) and reads the sensors with both backends:
   than ``tol`` inches or any marker differs; bit-identical poses are counted too;
 * the encoded state: the reference ``read`` + ``encode`` of the pymunk backend against the
   fast backend's fused ``sense`` (compiled read-out), both with the same noise draws
-  (noise off unless ``noise`` is given, e.g. ``"uniform"``).
+  (noise off unless ``noise`` is given, e.g. ``"uniform"``);
+* with ``world`` (e.g. ``"koolio-real"``) the realism models of that world are on: the
+  incidence cosines and other plates in view are compared too, and the readings after
+  the models (the reference :func:`realism.apply_reference` against the compiled
+  :func:`realism_kernel.apply_realism`, same draws) must agree bit for bit, with the same
+  echoes, missed detections and misread plates.
 
 ``tests/test_raycast.py`` runs it on a small sample per shipped arena;
 ``tools/agreement.py`` on 100k poses per arena. :func:`cone_disagreement` measures how
@@ -25,10 +30,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from .arena import load_arena
-from .config import Config
+from .config import Config, apply_world
 from .geometry import distance_point_segment, point_in_polygon
 from .qtable import KeywordLayout
-from .sensors import SensorSuite
+from .sensors import Readings, SensorSuite
 from .world import COLLISION_SLOP, World
 
 
@@ -39,7 +44,8 @@ class Agreement:
     distance_mismatches: int
     """Poses where a distance differs by more than ``tol`` or a camera's marker differs."""
     state_mismatches: int
-    """Poses whose encoded state, Bump or goal-close differ."""
+    """Poses whose encoded state, Bump or goal-close, or readings after the realism models
+    and noise (with their echoes and camera flags) differ."""
     bit_identical: int
     """Poses whose every distance is bit-identical."""
     max_abs_diff: float
@@ -69,33 +75,57 @@ def free_poses(arena_name: str, radius: float, n: int, seed: int) -> np.ndarray:
 
 
 def compare_backends(
-    arena_name: str, n: int, seed: int = 0, tol: float = 1e-6, noise: str = "none"
+    arena_name: str,
+    n: int,
+    seed: int = 0,
+    tol: float = 1e-6,
+    noise: str = "none",
+    world: str | None = None,
 ) -> Agreement:
     """Read both backends at ``n`` random free poses of ``arena_name`` (see module doc)."""
     cfg = Config()
     cfg.sensors.noise.model = noise
+    if world is not None:
+        cfg = apply_world(cfg, world)
+        cfg.sensors.noise.model = noise
     radius = cfg.robot.radius
     arena = load_arena(arena_name, radius).to_world()
-    world = World(arena.segments(), radius)
+    space = World(arena.segments(), radius)
     markers = [m.at for m in arena.end_of_world]
-    ref = SensorSuite(cfg.sensors, world, arena.goal().at, markers, backend="pymunk")
-    fast = SensorSuite(cfg.sensors, world, arena.goal().at, markers, backend="fast")
+    plates = [g.at for g in arena.goals if g.name != arena.active_goal]
+    ref, fast = (
+        SensorSuite(cfg.sensors, space, arena.goal().at, markers, backend=b,
+                    realism=cfg.realism, plates=plates)
+        for b in ("pymunk", "fast")
+    )  # fmt: skip
     layout_key = KeywordLayout(tuple(ref.levels)).state_key
     dist_bad = state_bad = identical = 0
     worst = 0.0
     for i, (x, y, h) in enumerate(free_poses(arena_name, radius, n, seed)):
-        raw_r, rays_r, k_r = ref.raw(x, y, h)
-        raw_f, rays_f, k_f = fast.raw(x, y, h)
-        diff = max(float(np.max(np.abs(raw_r - raw_f))), float(np.max(np.abs(rays_r - rays_f))))
+        g_r, g_f = ref.geometry(x, y, h), fast.geometry(x, y, h)
+        pairs = [(g_r.raw, g_f.raw), (g_r.rays, g_f.rays)]
+        pairs += [(g_r.ray_cos, g_f.ray_cos), (g_r.decoy, g_f.decoy)]
+        diff = max(float(np.max(np.abs(a - b))) for a, b in pairs)
         worst = max(worst, diff)
-        dist_bad += diff > tol or k_r != k_f
-        identical += bool(np.array_equal(raw_r, raw_f) and np.array_equal(rays_r, rays_f))
-        r = ref.finish(raw_r, rays_r, k_r, np.random.default_rng([seed, i]))
+        dist_bad += diff > tol or g_r.targets != g_f.targets
+        identical += all(np.array_equal(a, b) for a, b in pairs)
+        rng = np.random.default_rng([seed, i])
+        r = ref.finish(g_r.raw, g_r.rays, g_r.targets, rng, g_r.ray_cos, g_r.decoy)
         codes = ref.encode(r)
         want = (layout_key(codes), ref.bump(r), ref.goal_close(r))
         got = fast.sense((x, y, h), np.random.default_rng([seed, i]))
-        state_bad += want != got or codes != fast.last()[1]
+        state_bad += want != got or codes != fast.last()[1] or not same_readings(r, fast.last()[0])
     return Agreement(arena_name, n, dist_bad, state_bad, identical, worst)
+
+
+def same_readings(a: Readings, b: Readings) -> bool:
+    """Every reading and every realism record of ``a`` and ``b`` bit-identical."""
+    arrays = ("sonar", "goal", "eow", "rays", "echo", "crosstalk", "missed", "misread")
+    return (
+        all(np.array_equal(getattr(a, k), getattr(b, k)) for k in arrays)
+        and a.compass == b.compass
+        and a.eow_target == b.eow_target
+    )
 
 
 @dataclass

@@ -40,6 +40,7 @@ from typing import Any
 import yaml
 
 from .errors import ConfigError, located
+from .realism import RealismConfig, validate_realism
 
 #: Robot profiles (paper §3): radius in inches.
 ROBOT_PROFILES: dict[str, float] = {
@@ -126,7 +127,9 @@ class CameraConfig:
 @dataclass
 class CompassConfig:
     noise: float = 0.25
-    """Noise fraction (paper: 25 percent; why it was dropped from the state)."""
+    """Noise as an angle, a fraction of a full turn (paper: 25 percent, why the compass
+    was dropped from the state): uniform within +-noise turns (0.25: +-90 degrees) or
+    gaussian with sigma noise/2 turns, the same at every heading."""
     in_state: bool = False
     """Add the N/E/S/W compass code to the state (the paper dropped it)."""
 
@@ -233,6 +236,8 @@ class Config:
     rescue: RescueConfig = field(default_factory=RescueConfig)
     episode: EpisodeConfig = field(default_factory=EpisodeConfig)
     learner: LearnerConfig = field(default_factory=LearnerConfig)
+    realism: RealismConfig = field(default_factory=RealismConfig)
+    """The realism models (:mod:`koolio_pymunk.realism`): off unless a world sets them."""
 
     def validate(self, source: str = "<config>") -> Config:
         """Check ranges; raise ConfigError naming the item. Returns self."""
@@ -513,6 +518,7 @@ def _validate(cfg: Config, src: str) -> None:
             0 <= getattr(le.epsilon, name) <= 1, src, f"learner.epsilon.{name}", "must be in [0, 1]"
         )
     _check(le.epsilon.decay_episodes >= 0, src, "learner.epsilon.decay_episodes", "must be >= 0")
+    validate_realism(cfg.realism, src)
 
 
 def _increasing(xs: list[float]) -> bool:

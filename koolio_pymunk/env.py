@@ -16,10 +16,15 @@ from .config import Config, apply_world, load_config
 from .errors import ConfigError
 from .geometry import EPS, point_in_polygon
 from .qtable import KeywordLayout
+from .realism import MotionErrors, Randomizer, RealismConfig, motion_on
 from .rescue import rescue_robot, wants_rescue
 from .rules import TERMS, Judgement, judge
 from .sensors import Readings, SensorSuite
-from .world import ACTION_NAMES, World
+from .world import ACTION_NAMES, Action, World
+
+#: The event of a Stop in front of a misread plate (realism ``camera.misread``): the robot
+#: believes it delivered (the goal reward, the episode ends) at another door.
+WRONG_DOOR = "wrong_door"
 
 
 class EndZones:
@@ -75,8 +80,11 @@ class KoolioEnv(gym.Env):
     reverse / turn / forward by action. ``info["reward_terms"]`` names them.
 
     **Episode end.** ``terminated`` at the goal or in an end-of-world zone; ``truncated``
-    after ``episode.max_steps`` steps. Each episode starts at the arena's start point with
-    a uniformly random heading unless the arena fixes it (exploring starts).
+    after ``episode.max_steps`` steps. With the misread-plate model on, a Stop whose
+    front camera reads another door's plate as the goal Close gets the goal reward and
+    ends the episode as the robot would, but its event is ``wrong_door``, not ``goal``.
+    Each episode starts at the arena's start point with a uniformly random heading
+    unless the arena fixes it (exploring starts).
 
     **Rescue.** With ``rescue.auto_rescue_toggle`` on, a bumping robot past
     ``max_steps_before_rescue`` steps is rescued with probability ``rescue_chance``
@@ -92,10 +100,16 @@ class KoolioEnv(gym.Env):
 
     **World.** ``world`` (a profile name such as ``koolio-real``, or a file) lays the
     realism models and sensor noise of a world over the configuration
-    (:func:`~koolio_pymunk.config.apply_world`); the default is the ideal world.
+    (:func:`~koolio_pymunk.config.apply_world`); the default is the ideal world. The
+    realism models (:mod:`koolio_pymunk.realism`) act on every reading and move; with
+    ``realism.randomize`` each reset draws the episode's parameters
+    (:attr:`realism_draw`). :attr:`readings` holds what a real robot's driver would hand
+    to ``robot_runtime.py`` (``sonar``, ``goal``, ``eow``: inches from the robot's edge,
+    ``really_long_distance`` when nothing is seen) and what the models did (``echo`` per
+    sonar sub-arc ray, ``missed`` and ``misread`` per camera).
 
-    All randomness (start headings, sensor noise, rescues) comes from ``self.np_random``,
-    seeded by ``reset(seed=...)``.
+    All randomness (start headings, sensor noise, realism, rescues) comes from
+    ``self.np_random``, seeded by ``reset(seed=...)``.
     """
 
     metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 30}
@@ -132,11 +146,20 @@ class KoolioEnv(gym.Env):
         self.world_arena = self.arena.to_world()
         self.world = World.from_arena(self.arena, radius)
         self.zones = EndZones(self.world_arena, radius)
+        realism = self.config.realism
+        self.realism: RealismConfig = realism
+        """The realism models of the current episode (a draw when randomized)."""
+        self.randomizer = Randomizer(realism)
+        self.realism_draw: dict[str, float] = {}
+        """The parameters domain randomization drew for this episode (empty: none)."""
+        self.motion = MotionErrors(realism.motion) if self._moves_with_errors() else None
         self.sensors = SensorSuite(
             self.config.sensors,
             self.world,
             self.world_arena.goal().at,
             [m.at for m in self.world_arena.end_of_world],
+            realism=realism,
+            plates=self._other_plates(),
         )
         self.layout = KeywordLayout(tuple(self.sensors.levels))
         self.action_space = spaces.Discrete(len(ACTION_NAMES))
@@ -182,6 +205,11 @@ class KoolioEnv(gym.Env):
         once (or seed ``np_random``) to own a seeded generator."""
         options = options or {}
         rng = self.np_random
+        if self.randomizer:
+            self.realism, self.realism_draw = self.randomizer.draw(rng)
+            self.sensors.set_realism(self.realism)
+            if self.motion is not None:
+                self.motion.configure(self.realism.motion)
         goal = options.get("goal")
         if goal is None and self.random_goal:
             names = self.world_arena.goal_names()
@@ -211,10 +239,15 @@ class KoolioEnv(gym.Env):
         same as ``next_key`` when no rescue happened).
         """
         prev_key = self.state_key
-        self.world.act((action,), self._distance, self._arc)
+        if self.motion is None:
+            self.world.act((action,), self._distance, self._arc)
+        else:
+            self._act_with_errors(action)
         bump, goal_close = self._sense()
         x, y, _ = self._pose
         j = judge(action, goal_close, self.zones.contains(x, y), bump, self.config.rewards)
+        if j.event == "goal" and self.sensors.goal_misread():
+            j = Judgement(WRONG_DOOR, j.reward, True, j.terms)
         self.steps += 1
         self.bumps += int(bump)
         self.episode_reward += j.reward
@@ -238,8 +271,31 @@ class KoolioEnv(gym.Env):
     def set_goal(self, name: str) -> None:
         """Make ``name`` the active goal (the cameras see only its plate)."""
         self.world_arena = self.world_arena.with_active_goal(name)
-        self.sensors.set_goal(self.world_arena.goal().at)
+        self.sensors.set_goal(self.world_arena.goal().at, self._other_plates())
         self.goal_name = name
+
+    def _other_plates(self) -> list[Point]:
+        """The plates of every goal but the active one (a misread takes one for it)."""
+        active = self.world_arena.active_goal
+        return [g.at for g in self.world_arena.goals if g.name != active]
+
+    def _moves_with_errors(self) -> bool:
+        """The motion model is on, or domain randomization may switch it on."""
+        return motion_on(self.config.realism) or any(
+            k.startswith("motion.") for k in self.config.realism.randomize
+        )
+
+    def _act_with_errors(self, action: int) -> None:
+        """The action as a real differential drive does it (:class:`MotionErrors`)."""
+        motion, rng = self.motion, self.np_random
+        assert motion is not None
+        if action in (Action.FORWARD, Action.REVERSE):
+            sign = 1.0 if action == Action.FORWARD else -1.0
+            self.world.drive(0, *motion.move(sign, self._distance, rng))
+        elif action == Action.ROTATE_LEFT:
+            self.world.drive(0, 0.0, motion.turn(self._arc, rng))
+        elif action == Action.ROTATE_RIGHT:
+            self.world.drive(0, 0.0, -motion.turn(self._arc, rng))
 
     def _rescue(self) -> None:
         rescue_robot(self.world, 0, self.config.rescue, self._distance, self.np_random)

@@ -57,6 +57,7 @@ import numpy as np
 import pymunk.batch
 
 from .env import KoolioEnv
+from .errors import KoolioError
 from .qkernel import (
     EVENTS,
     RESCUE_DRAW,
@@ -71,6 +72,7 @@ from .qkernel import (
 from .qtable import QTableStore, load_qtable
 from .raycast import any_near_wall, new_trig, sense_batch, sense_one, wall_array
 from .readout import readout, readout_batch
+from .realism import realism_on
 from .rescue import rescue_robot
 from .training import (
     EpisodeResult,
@@ -216,6 +218,9 @@ class Fleet:
             self.rays[r],
             self.eow_k[r],
             self.trig[r],
+            k.plates,
+            k.ray_cos,
+            k.decoy,
         )
         draws = self.suite.draw_noise(rng, k.n_raw)
         return readout(self.raw[r], draws, *self._args(), self.out[r], self.eow_k[r], self.codes[r])
@@ -264,6 +269,11 @@ class _Run:
         save_every: int | None,
     ) -> None:
         cfg = env.config
+        if realism_on(cfg.realism):
+            raise KoolioError(
+                "--robots: the many-robot loop runs the ideal world only (its compiled tick "
+                "has no realism models) and this configuration turns realism on: use --robots 1"
+            )
         self.env, self.cfg, self.store = env, cfg, store
         self.table = store.open(env.layout, sensor_signature(cfg), cfg.learner.q_init)
         self.shared = SharedTable(self.table)

@@ -165,12 +165,14 @@ def hypot(dx: float, dy: float) -> float:
 
 
 @numba.njit(cache=True)
-def _first_alpha(
+def _first_hit(
     x: float, y: float, dx: float, dy: float, walls: np.ndarray, active: np.ndarray, n: int
-) -> float:
+) -> tuple[float, int]:
     """Smallest hit fraction ``alpha < 1`` of the ray ``(x, y) + alpha * (dx, dy)`` over
-    walls ``active[:n]``; 1.0 when none is hit. Chipmunk's radius-0 segment query."""
+    walls ``active[:n]`` and the wall hit (1.0 and -1 when none is hit). Chipmunk's
+    radius-0 segment query."""
     best = 1.0
+    best_k = -1
     for j in range(n):
         k = active[j]
         ax = walls[k, 0]
@@ -189,7 +191,16 @@ def _first_alpha(
                 t = ad / (ad - bd)
                 if t < best:
                     best = t
-    return best
+                    best_k = k
+    return best, best_k
+
+
+@numba.njit(cache=True)
+def _first_alpha(
+    x: float, y: float, dx: float, dy: float, walls: np.ndarray, active: np.ndarray, n: int
+) -> float:
+    """The hit fraction of :func:`_first_hit` (1.0 when none is hit)."""
+    return _first_hit(x, y, dx, dy, walls, active, n)[0]
 
 
 @numba.njit(cache=True)
@@ -352,15 +363,22 @@ def sense_one(
     rays: np.ndarray,
     eow_k: np.ndarray,
     trig: np.ndarray,
+    plates: np.ndarray,
+    ray_cos: np.ndarray,
+    decoy: np.ndarray,
 ) -> None:
     """One noise-free reading of every sensor of a robot at ``(x, y, h)``.
 
     ``params`` = ``[ray_length, radius, really_long_distance, camera_half_arc,
-    sonar_model, sonar_half_arc]``; ``sonar_model`` 0 is the paper's sub-arc rays, 1 the
-    exact cone (:func:`cone_nearest` around the mean of each sonar's ray offsets).
-    Writes ``raw`` = sonar edge distances, goal per camera, end-of-world per camera,
-    compass units (what ``SensorSuite`` noises next), ``rays`` = every sub-arc ray's
-    centre distance and ``eow_k`` = the marker each camera sees (-1: none).
+    sonar_model, sonar_half_arc, incidence]``; ``sonar_model`` 0 is the paper's sub-arc
+    rays, 1 the exact cone (:func:`cone_nearest` around the mean of each sonar's ray
+    offsets). Writes ``raw`` = sonar edge distances, goal per camera, end-of-world per
+    camera, compass units (what ``SensorSuite`` noises next), ``rays`` = every sub-arc
+    ray's centre distance and ``eow_k`` = the marker each camera sees (-1: none).
+    For the realism models (:mod:`koolio_pymunk.realism`): with ``incidence`` 1 also
+    ``ray_cos`` = the cosine of each ray's incidence on the wall it hits (0: no hit), and
+    with ``plates`` not empty ``decoy`` = per camera the nearest of ``plates`` (the other
+    doors' plates) in its arc and in sight (far: none).
     ``trig`` (:func:`new_trig`) caches every ray's ``cos`` and ``sin`` for the last few
     headings: moves and stops keep the heading and turns often come back to one, so few
     readings pay for the trigonometry (the values are the same either way).
@@ -377,7 +395,8 @@ def sense_one(
         _sense_cones(x, y, h, ray_offsets, params, walls, near, n_near, raw, rays)
     else:
         directions = _ray_directions(h, ray_offsets, trig)
-        _sense_sub_arcs(x, y, ray_offsets, params, walls, near, n_near, raw, rays, directions)
+        _sense_sub_arcs(x, y, ray_offsets, params, walls, near, n_near, raw, rays, directions,
+                        ray_cos)  # fmt: skip
     goal2 = goal.reshape(1, 2)
     for c in range(n_cam):
         direction = h + camera_dirs[c]
@@ -385,6 +404,8 @@ def sense_one(
         d, k = _camera(x, y, direction, markers, half_arc, radius, far, walls)
         raw[n_sonar + n_cam + c] = d
         eow_k[c] = k
+        if plates.shape[0] > 0:
+            decoy[c] = _camera(x, y, direction, plates, half_arc, radius, far, walls)[0]
     raw[n_sonar + 2 * n_cam] = (h / TWO_PI) * 256.0
 
 
@@ -445,10 +466,14 @@ def _sense_sub_arcs(
     raw: np.ndarray,
     rays: np.ndarray,
     trig: np.ndarray,
+    ray_cos: np.ndarray,
 ) -> None:
     """The paper's model: the nearest hit over each sonar's sub-arc rays (``trig``: one
-    cache row of :func:`_ray_directions`)."""
+    cache row of :func:`_ray_directions`). With ``params[6]`` 1 (the realism incidence
+    model) also each ray's incidence cosine ``|cos(angle) nx + sin(angle) ny|`` on the
+    wall it hits (its unit normal; 0 when nothing is hit) in ``ray_cos``."""
     length, radius, far = params[0], params[1], params[2]
+    incidence = params[6] == 1.0
     n_sonar, n_sub = ray_offsets.shape
     n_rays = n_sonar * n_sub
     active = np.empty(walls.shape[0], np.int64)
@@ -468,9 +493,14 @@ def _sense_sub_arcs(
         n = _walls_in_box(x0, y0, x1, y1, walls, near, n_near, active)
         nearest = np.inf
         for i in range(n_sub):
-            d = _first_alpha(x, y, ends[i, 0] - x, ends[i, 1] - y, walls, active, n) * length
+            alpha, k = _first_hit(x, y, ends[i, 0] - x, ends[i, 1] - y, walls, active, n)
+            d = alpha * length
             rays[s, i] = d
             nearest = min(nearest, d)
+            if incidence:
+                c = trig[1 + s * n_sub + i]
+                sn = trig[1 + n_rays + s * n_sub + i]
+                ray_cos[s, i] = abs(c * walls[k, 4] + sn * walls[k, 5]) if k >= 0 else 0.0
         raw[s] = far if nearest > length - 1e-9 else nearest - radius
 
 
@@ -491,7 +521,11 @@ def sense_batch(
     trig: np.ndarray,
 ) -> None:
     """:func:`sense_one` for robot ``r`` at ``(xs[r], ys[r], hs[r])`` with goal
-    ``goals[r]``, writing row ``r`` of ``raw``, ``rays``, ``eow_k`` and ``trig``."""
+    ``goals[r]``, writing row ``r`` of ``raw``, ``rays``, ``eow_k`` and ``trig`` (the
+    ideal world: ``params[6]`` must be 0, no plates)."""
+    no_plates = np.empty((0, 2))
+    no_cos = np.empty((0, 0))
+    no_decoy = np.empty(0)
     for r in range(xs.shape[0]):
         sense_one(
             xs[r],
@@ -507,6 +541,9 @@ def sense_batch(
             rays[r],
             eow_k[r],
             trig[r],
+            no_plates,
+            no_cos,
+            no_decoy,
         )
 
 
@@ -532,6 +569,24 @@ class PymunkRays:
             if hit is not None:
                 out[idx] = hit.alpha * length
         return out
+
+    def cast_incidence(
+        self, x: float, y: float, angles: np.ndarray, length: float
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`cast` and each ray's incidence cosine ``|cos(a) nx + sin(a) ny|`` on the
+        wall it hits, with pymunk's reported normal (0 where nothing is hit)."""
+        cos_a, sin_a = np.cos(angles), np.sin(angles)
+        ends_x = x + length * cos_a
+        ends_y = y + length * sin_a
+        query = self.world.space.segment_query_first
+        out = np.full(angles.shape, length)
+        inc = np.zeros(angles.shape)
+        for idx in np.ndindex(angles.shape):
+            hit = query((x, y), (float(ends_x[idx]), float(ends_y[idx])), 0.0, WALL_ONLY)
+            if hit is not None:
+                out[idx] = hit.alpha * length
+                inc[idx] = abs(cos_a[idx] * hit.normal.x + sin_a[idx] * hit.normal.y)
+        return out, inc
 
     def line_of_sight(self, x: float, y: float, tx: float, ty: float) -> bool:
         dist = math.hypot(tx - x, ty - y)

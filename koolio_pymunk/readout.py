@@ -4,9 +4,11 @@
 (``[sonar..., goal cam..., end-of-world cam..., compass]``) and one draw per reading into
 what the learner needs, in one call:
 
-1. noise: ``raw * (1 + draw * frac)`` except readings at ``really_long_distance``;
+1. noise: ``raw * (1 + draw * frac)`` except readings at ``really_long_distance``; the
+   compass (the last reading) is an angle: ``raw + draw * frac * 256`` (its noise is a
+   fraction of a full turn, the same at every heading);
 2. camera limit (paper order: noise first): unseen or beyond ``max_camera_view`` -> far;
-3. compass units modulo 256;
+3. compass units wrapped into [0, 256) (:func:`wrap_compass`);
 4. codes (Tables 6 and 7: the number of thresholds at or below the value, as
    ``np.searchsorted(..., side="right")``), sonar groups averaged first;
 5. the state key (Table 12 without the action bits), Bump (any single sonar below the
@@ -64,6 +66,18 @@ def compass_code(units: float) -> int:
 
 
 @numba.njit(cache=True)
+def wrap_compass(units: float) -> float:
+    """Compass units wrapped into [0, 256): ``units % 256`` (a heading just below 0
+    would round to 256.0 itself: that is 0). The one implementation, compiled.
+
+    >>> wrap_compass(-1e-20), wrap_compass(300.0), wrap_compass(-64.0)
+    (0.0, 44.0, 192.0)
+    """
+    w = units % 256.0
+    return 0.0 if w >= 256.0 else w
+
+
+@numba.njit(cache=True)
 def readout(
     raw: np.ndarray,
     draws: np.ndarray,
@@ -91,13 +105,13 @@ def readout(
     max_view = limits[1]
     m = raw.shape[0]
     n_cam = (m - 1 - n_sonar) // 2
-    for i in range(m):
+    for i in range(m - 1):
         v = raw[i]
         out[i] = v if v >= far else v * (1.0 + draws[i] * fracs[i])
     for i in range(n_sonar, n_sonar + 2 * n_cam):
         if raw[i] >= far or out[i] > max_view:
             out[i] = far
-    out[m - 1] = out[m - 1] % 256.0
+    out[m - 1] = wrap_compass(raw[m - 1] + draws[m - 1] * fracs[m - 1] * 256.0)
     for c in range(n_cam):
         if not out[n_sonar + n_cam + c] < far:
             eow_k[c] = -1

@@ -15,7 +15,12 @@ noised, then encoded (Tables 6 and 7).
   a wall whose infinite line crosses the sight line beyond the segment's ends does not
   block). The nearest candidate is noised and then compared with ``max_camera_view``;
   beyond it, or with no candidate, the reading is ``really_long_distance``.
-* **Compass**: heading / 2pi * 256 with 25 % noise, encoded East/North/West/South.
+* **Compass**: heading / 2pi * 256 in 0..255, encoded East/North/West/South. Its noise
+  is an angle: ``compass.noise`` is a fraction of a full turn (the paper's 25 %: up to
+  +-64 units, +-90 degrees, whatever the heading), not a fraction of the value.
+* **Realism** (:mod:`koolio_pymunk.realism`, off by default): the sonar and camera
+  models act on the noise-free reading before the paper's noise; :class:`Readings`
+  records each sub-arc ray's echo and each camera's missed detection or misread plate.
 
 Sonar groups (paper: 1&2 and 5&6) are averaged before encoding. The state is the tuple
 of codes in keyword order: goal cameras, end-of-world cameras, sonar groups (then the
@@ -43,7 +48,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -51,7 +56,9 @@ from .arena import Point
 from .config import SensorConfig
 from .errors import ConfigError
 from .raycast import make_engine, new_trig, sense_one
-from .readout import compass_code, readout
+from .readout import compass_code, readout, wrap_compass
+from .realism import RealismConfig, SensorRealism, apply_reference
+from .realism_kernel import sense_realism
 from .world import World
 
 #: Codes of the sonar intervals (Table 6) and camera intervals (Table 7).
@@ -77,6 +84,15 @@ class Readings:
     """Noise-free centre distance of every sonar sub-arc ray (n_sonar x sub_arcs)."""
     eow_target: list[int]
     """Per camera: index of the marker seen (-1: none)."""
+    echo: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), np.bool_))
+    """Per sonar sub-arc ray (n_sonar x sub_arcs): it got an echo (hit a wall in range and,
+    with the incidence model, not at a grazing angle)."""
+    crosstalk: np.ndarray = field(default_factory=lambda: np.zeros(0, np.bool_))
+    """Per sonar: it read a neighbour's echo (realism crosstalk)."""
+    missed: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.bool_))
+    """Per camera ``[goal, end-of-world]``: a target in view was not detected."""
+    misread: np.ndarray = field(default_factory=lambda: np.zeros(0, np.bool_))
+    """Per camera: its goal reading is another door's plate."""
 
     def goal_seen(self, really_long: float) -> list[bool]:
         return [bool(d < really_long) for d in self.goal]
@@ -104,6 +120,8 @@ class SensorSuite:
         markers: Sequence[Point],
         robot: int = 0,
         backend: str | None = None,
+        realism: RealismConfig | None = None,
+        plates: Sequence[Point] = (),
     ) -> None:
         self.cfg = cfg
         self.world = world
@@ -140,6 +158,19 @@ class SensorSuite:
                 f"got {so.sonar_arc_deg:g}"
             )
         self.engine = make_engine(self.backend, world)
+        self.plates = [(float(p[0]), float(p[1])) for p in plates]
+        """The other doors' plates (a misread camera may take one for the goal)."""
+        self.realism = SensorRealism(
+            realism or RealismConfig(),
+            so.sonar_sensors_deg,
+            self.n_camera,
+            self.radius,
+            self.ray_length,
+            self.far,
+            ca.max_camera_view,
+        )
+        """The sonar and camera realism models (:mod:`koolio_pymunk.realism`)."""
+        self._check_realism()
         self._kernel = KernelInputs(self)
         self._last: tuple[Readings, tuple[int, ...]] | None = None
 
@@ -152,13 +183,32 @@ class SensorSuite:
     def read(self, pose: tuple[float, float, float], rng: np.random.Generator) -> Readings:
         """Read every sensor at ``pose``; all noise is drawn from ``rng``."""
         x, y, h = pose
-        return self.finish(*self.raw(x, y, h), rng)
+        g = self.geometry(x, y, h)
+        return self.finish(g.raw, g.rays, g.targets, rng, g.ray_cos, g.decoy)
 
     def finish(
-        self, raw: np.ndarray, rays: np.ndarray, targets: list[int], rng: np.random.Generator
+        self,
+        raw: np.ndarray,
+        rays: np.ndarray,
+        targets: list[int],
+        rng: np.random.Generator,
+        ray_cos: np.ndarray | None = None,
+        decoy: np.ndarray | None = None,
     ) -> Readings:
-        """Noise (drawn from ``rng``) and camera limit applied to a :meth:`raw` reading."""
-        noised = self.apply_noise(raw, rng)
+        """The realism models, noise and camera limit applied to a :meth:`raw` reading.
+
+        Draw order: the paper's noise (one call), then, with a realism model on, the
+        realism uniforms (one call); ``ray_cos`` and ``decoy`` are :meth:`geometry`'s
+        (needed with the incidence and misread models)."""
+        e = self.draw_noise(rng, raw.shape[0]) * self._noise_scale
+        real = None
+        if self.realism.on:
+            u = rng.random(self.realism.n_draws)
+            ray_cos = np.zeros(rays.shape) if ray_cos is None else ray_cos
+            decoy = np.full(self.n_camera, self.far) if decoy is None else decoy
+            real = apply_reference(self.realism, raw, rays, ray_cos, decoy, u)
+            raw = real.raw
+        noised = self._noised(raw, e)
         n, m = self.n_sonar, self.n_camera
         goal_n = self._camera_limit(noised[n : n + m], raw[n : n + m])
         eow_n = self._camera_limit(noised[n + m : n + 2 * m], raw[n + m : n + 2 * m])
@@ -167,34 +217,62 @@ class SensorSuite:
             sonar=noised[:n],
             goal=goal_n,
             eow=eow_n,
-            compass=float(noised[-1] % 256.0),
+            compass=wrap_compass(noised[-1]),
             rays=rays,
             eow_target=eow_targets,
+            echo=self.echoes(rays) if real is None else real.echo,
+            crosstalk=np.zeros(n, np.bool_) if real is None else real.crosstalk,
+            missed=np.zeros((m, 2), np.bool_) if real is None else real.missed,
+            misread=np.zeros(m, np.bool_) if real is None else real.misread,
         )
+
+    def echoes(self, rays: np.ndarray) -> np.ndarray:
+        """Per sub-arc ray: it hit a wall within range (the ideal world's echo)."""
+        return rays <= self.ray_length - 1e-9
 
     def raw(self, x: float, y: float, h: float) -> tuple[np.ndarray, np.ndarray, list[int]]:
         """Noise-free readings ``[sonar..., goal cam..., end-of-world cam..., compass]``,
         every sub-arc ray's centre distance, and the marker each camera sees (-1: none)."""
+        g = self.geometry(x, y, h)
+        return g.raw, g.rays, g.targets
+
+    def geometry(self, x: float, y: float, h: float) -> Geometry:
+        """:meth:`raw` and what the realism models need (incidence, other plates)."""
         if self.fused:
             k = self._kernel
-            raw = np.empty(k.n_raw)
-            rays = np.empty(self.ray_offsets.shape)
+            g = Geometry(
+                np.empty(k.n_raw),
+                np.empty(self.ray_offsets.shape),
+                [],
+                np.zeros(self.ray_offsets.shape),
+                np.full(self.n_camera, self.far),
+            )
             eow_k = np.empty(self.n_camera, np.int64)
-            k.sense(x, y, h, raw, rays, eow_k)
-            return raw, rays, eow_k.tolist()
-        rays = self.cast_sonar(x, y, h)
+            k.sense(x, y, h, g.raw, g.rays, eow_k, g.ray_cos, g.decoy)
+            g.targets = eow_k.tolist()
+            return g
+        ray_cos = np.zeros(self.ray_offsets.shape)
+        if self.realism.incidence:
+            rays, ray_cos = self.engine.cast_incidence(x, y, h + self.ray_offsets, self.ray_length)
+        else:
+            rays = self.cast_sonar(x, y, h)
         sonar = rays.min(axis=1) - self.radius
         sonar = np.where(rays.min(axis=1) > self.ray_length - 1e-9, self.far, sonar)
         goal = np.empty(self.n_camera)
         eow = np.empty(self.n_camera)
+        decoy = np.full(self.n_camera, self.far)
         targets: list[int] = []
         for c in range(self.n_camera):
-            goal[c] = self._camera_distance(x, y, h + self.camera_dirs[c], [self.goal])[0]
-            d, k = self._camera_distance(x, y, h + self.camera_dirs[c], self.markers)
+            direction = h + self.camera_dirs[c]
+            goal[c] = self._camera_distance(x, y, direction, [self.goal])[0]
+            d, k = self._camera_distance(x, y, direction, self.markers)
             eow[c] = d
             targets.append(k)
+            if self.realism.misread:
+                decoy[c] = self._camera_distance(x, y, direction, self.plates)[0]
         compass = (h / (2.0 * math.pi)) * 256.0
-        return np.concatenate([sonar, goal, eow, [compass]]), rays, targets
+        raw = np.concatenate([sonar, goal, eow, [compass]])
+        return Geometry(raw, rays, targets, ray_cos, decoy)
 
     def sense(
         self, pose: tuple[float, float, float], rng: np.random.Generator
@@ -228,6 +306,15 @@ class SensorSuite:
             codes.append(compass_code(r.compass))
         return tuple(codes)
 
+    def goal_misread(self) -> bool:
+        """The front camera's goal reading of the last :meth:`sense` is another door's
+        plate (the realism misread model)."""
+        if not self.realism.misread:
+            return False
+        if self.fused:
+            return bool(self._kernel.misread[0])
+        return bool(self.last()[0].misread[0])
+
     def bump(self, r: Readings) -> bool:
         """True when any single sonar reads Bump (paper: the Bump reward and pink robot)."""
         return bool((r.sonar < self.sonar_thresholds[0]).any())
@@ -236,9 +323,26 @@ class SensorSuite:
         """True when the front camera (camera 0) reads the goal Close."""
         return bool(r.goal[0] < self.camera_thresholds[0])
 
-    def set_goal(self, goal: Point) -> None:
+    def set_goal(self, goal: Point, plates: Sequence[Point] | None = None) -> None:
+        """Make ``goal`` the plate the cameras look for; ``plates``: the other plates."""
         self.goal = (float(goal[0]), float(goal[1]))
         self._kernel.goal[:] = self.goal
+        if plates is not None:
+            self.plates = [(float(p[0]), float(p[1])) for p in plates]
+            self._kernel.configure_realism()
+
+    def set_realism(self, cfg: RealismConfig) -> None:
+        """Take the sonar and camera models of ``cfg`` (domain randomization)."""
+        self.realism.configure(cfg)
+        self._check_realism()
+        self._kernel.configure_realism()
+
+    def _check_realism(self) -> None:
+        if self.backend == "cone" and self.realism.incidence:
+            raise ConfigError(
+                "realism.sonar.max_incidence_deg: the cone sonar model (sensors.backend: "
+                "cone) has no rays to test for incidence; use backend fast or pymunk"
+            )
 
     # -- geometry -------------------------------------------------------------------
     def cast_sonar(self, x: float, y: float, h: float) -> np.ndarray:
@@ -275,22 +379,47 @@ class SensorSuite:
             return rng.standard_normal(n)
         return rng.uniform(-1.0, 1.0, n)
 
+    @property
+    def _noise_scale(self) -> np.ndarray:
+        """Per reading, what a raw draw is multiplied by (halved for the gaussian model)."""
+        if self.cfg.noise.model == "gaussian":
+            return self.noise_fracs / 2.0
+        return self.noise_fracs
+
     def apply_noise(self, raw: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        """``raw * (1 + e)`` per the noise model; one draw per reading, always drawn."""
-        model = self.cfg.noise.model
-        if model == "gaussian":
-            e = rng.standard_normal(raw.shape) * (self.noise_fracs / 2.0)
-        else:
-            e = rng.uniform(-1.0, 1.0, raw.shape) * self.noise_fracs
-        out = raw * (1.0 + e)
-        return np.where(raw >= self.far, raw, out)
+        """The paper's noise on ``raw``; one draw per reading, always drawn."""
+        return self._noised(raw, self.draw_noise(rng, raw.shape[0]) * self._noise_scale)
+
+    def _noised(self, raw: np.ndarray, e: np.ndarray) -> np.ndarray:
+        """``raw * (1 + e)`` for distances (really long ones stay), ``raw + e * 256`` for
+        the compass (an angle: a fraction of a full turn), not yet wrapped to 0..256."""
+        out = np.where(raw >= self.far, raw, raw * (1.0 + e))
+        out[-1] = raw[-1] + e[-1] * 256.0
+        return out
+
+
+@dataclass
+class Geometry:
+    """A noise-free reading (:meth:`SensorSuite.geometry`)."""
+
+    raw: np.ndarray
+    """``[sonar..., goal cam..., end-of-world cam..., compass]``: edge distances, units."""
+    rays: np.ndarray
+    """Centre distance of every sonar sub-arc ray (the ray length when nothing is hit)."""
+    targets: list[int]
+    """Per camera: the end-of-world marker seen (-1: none)."""
+    ray_cos: np.ndarray
+    """Per ray: cosine of its incidence on the wall it hits (0 where not computed)."""
+    decoy: np.ndarray
+    """Per camera: the nearest other door's plate in view (far: none, or not computed)."""
 
 
 class KernelInputs:
     """Arrays and buffers of one :class:`SensorSuite` for the compiled kernels.
 
-    ``sense(x, y, h, raw, rays, eow_k)`` is :func:`raycast.sense_one`;
-    ``sense_readout(pose, rng)`` adds the noise draws and :func:`readout.readout`.
+    ``sense(x, y, h, raw, rays, eow_k, ray_cos, decoy)`` is :func:`raycast.sense_one`;
+    ``sense_readout(pose, rng)`` adds the noise draws, the realism models
+    (:func:`realism_kernel.apply_realism`, when one is on) and :func:`readout.readout`.
     """
 
     def __init__(self, s: SensorSuite) -> None:
@@ -299,7 +428,9 @@ class KernelInputs:
         self.ray_offsets = np.ascontiguousarray(s.ray_offsets, dtype=np.float64)
         cone = 1.0 if s.backend == "cone" else 0.0
         half_sonar = math.radians(s.cfg.sonar.sonar_arc_deg) / 2.0
-        self.params = np.array([s.ray_length, s.radius, s.far, s.camera_half_arc, cone, half_sonar])
+        self.params = np.array(
+            [s.ray_length, s.radius, s.far, s.camera_half_arc, cone, half_sonar, 0.0]
+        )
         self.camera_dirs = np.ascontiguousarray(s.camera_dirs, dtype=np.float64)
         self.goal = np.array(s.goal, dtype=np.float64)
         self.markers = np.array(s.markers, dtype=np.float64).reshape(-1, 2)
@@ -320,6 +451,34 @@ class KernelInputs:
         self.codes = np.empty(len(self.bits), np.int64)
         self.trig = new_trig(self.ray_offsets.size)
         self.pose = (0.0, 0.0, 0.0)
+        # Realism: inputs and what the models report of the last reading.
+        self.ray_cos = np.zeros(self.ray_offsets.shape)
+        self.decoy = np.full(s.n_camera, s.far)
+        self.echo = np.zeros(self.ray_offsets.shape, np.bool_)
+        self.crossed = np.zeros(s.n_sonar, np.bool_)
+        self.missed = np.zeros((s.n_camera, 2), np.bool_)
+        self.misread = np.zeros(s.n_camera, np.bool_)
+        self.configure_realism()
+
+    def configure_realism(self) -> None:
+        """Follow the suite's realism models: ray incidence on or off, the plates the
+        cameras may misread (none when the misread model is off: nothing to compute)."""
+        s, real = self.suite, self.suite.realism
+        self.real_on = real.on
+        self.params[6] = 1.0 if real.incidence else 0.0
+        plates = s.plates if real.misread else []
+        self.plates = np.array(plates, dtype=np.float64).reshape(-1, 2)
+        self.decoy[:] = s.far
+        self.noise = np.zeros(self.n_raw)
+        self._geometry_args = (self.ray_offsets, self.params, self.camera_dirs, self.goal,
+                               self.markers, self.walls, self.raw, self.rays, self.eow_k,
+                               self.trig, self.ray_cos, self.decoy, self.plates)  # fmt: skip
+        self._realism_args = (
+            real.params, real.flags, real.neighbours, self.echo, self.crossed, self.missed,
+            self.misread, self.fracs, s.n_sonar, self.limits, s.sonar_thresholds,
+            s.camera_thresholds, self.group_members, self.group_sizes, self.bits,
+            self.compass_in_state, self.out, self.codes,
+        )  # fmt: skip
 
     def key(self, codes: Sequence[int]) -> int:
         """The state key of ``codes`` (same as ``KeywordLayout.state_key``)."""
@@ -329,7 +488,15 @@ class KernelInputs:
         return key
 
     def sense(
-        self, x: float, y: float, h: float, raw: np.ndarray, rays: np.ndarray, eow_k: np.ndarray
+        self,
+        x: float,
+        y: float,
+        h: float,
+        raw: np.ndarray,
+        rays: np.ndarray,
+        eow_k: np.ndarray,
+        ray_cos: np.ndarray | None = None,
+        decoy: np.ndarray | None = None,
     ) -> None:
         sense_one(
             float(x),
@@ -345,6 +512,9 @@ class KernelInputs:
             rays,
             eow_k,
             self.trig,
+            self.plates,
+            self.ray_cos if ray_cos is None else ray_cos,
+            self.decoy if decoy is None else decoy,
         )
 
     def sense_readout(
@@ -352,6 +522,8 @@ class KernelInputs:
     ) -> tuple[int, bool, bool]:
         x, y, h = pose
         self.pose = pose
+        if self.real_on:
+            return self._sense_realism(x, y, h, rng)
         self.sense(x, y, h, self.raw, self.rays, self.eow_k)
         if self.gaussian:
             draws = rng.standard_normal(self.n_raw)
@@ -374,10 +546,26 @@ class KernelInputs:
             self.codes,
         )
 
+    def _sense_realism(
+        self, x: float, y: float, h: float, rng: np.random.Generator
+    ) -> tuple[int, bool, bool]:
+        """:meth:`sense_readout` with realism models on: one compiled call
+        (:func:`realism_kernel.sense_realism`); the same draws as the reference (with
+        uniform noise, its two calls as one: the generator's stream is the same)."""
+        n_draws = self.suite.realism.n_draws
+        if self.gaussian:
+            self.noise = rng.standard_normal(self.n_raw)
+            u = rng.random(n_draws)
+        else:
+            u = rng.random(self.n_raw + n_draws)
+        return sense_realism(float(x), float(y), float(h), *self._geometry_args, self.noise,
+                             u, not self.gaussian, *self._realism_args)  # fmt: skip
+
     def last_readings(self) -> tuple[Readings, tuple[int, ...]]:
         """:class:`Readings` and codes of the last :meth:`sense_readout` (copies)."""
         n, m = self.suite.n_sonar, self.suite.n_camera
         out = self.out.copy()
+        real = self.real_on
         r = Readings(
             sonar=out[:n],
             goal=out[n : n + m],
@@ -385,6 +573,10 @@ class KernelInputs:
             compass=float(out[-1]),
             rays=self.rays.copy(),
             eow_target=self.eow_k.tolist(),
+            echo=self.echo.copy() if real else self.suite.echoes(self.rays),
+            crosstalk=self.crossed.copy() if real else np.zeros(n, np.bool_),
+            missed=self.missed.copy() if real else np.zeros((m, 2), np.bool_),
+            misread=self.misread.copy() if real else np.zeros(m, np.bool_),
         )
         return r, tuple(int(c) for c in self.codes)
 

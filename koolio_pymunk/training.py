@@ -11,7 +11,10 @@ and a run resumed from its table file continues exactly as an uninterrupted one 
     episode,reward,steps,bumps,outcome,rescued,epsilon,goal
 
 ``outcome`` is ``goal``, ``end_of_world``, ``truncated`` (step cap) or ``interrupted``
-(Ctrl-C / Exit: the unfinished episode was folded into the table).
+(Ctrl-C / Exit: the unfinished episode was folded into the table). With domain
+randomization (``realism.randomize``) every row ends with the parameters drawn for its
+episode, one column per parameter, named ``realism.<section>.<name>`` (sorted), written
+with ``repr`` so that they round-trip exactly.
 """
 
 from __future__ import annotations
@@ -77,6 +80,9 @@ class EpisodeResult:
     rescued: bool
     epsilon: float
     goal: str
+    realism: tuple[float, ...] = ()
+    """The realism parameters drawn for the episode (domain randomization), in the order
+    of the log's ``realism.*`` columns."""
 
     def row(self) -> list[str]:
         return [
@@ -88,7 +94,13 @@ class EpisodeResult:
             str(int(self.rescued)),
             f"{self.epsilon:.6g}",
             self.goal,
+            *(repr(v) for v in self.realism),
         ]
+
+
+def realism_values(env: KoolioEnv) -> tuple[float, ...]:
+    """The episode's domain-randomization draw, in log column order (empty: none)."""
+    return tuple(env.realism_draw[k] for k in env.randomizer.keys)
 
 
 def run_episode(
@@ -114,9 +126,12 @@ def run_episode(
 
 
 class LogWriter:
-    """Appends CSV rows to the log (header once), flushing every row."""
+    """Appends CSV rows to the log (header once), flushing every row.
 
-    def __init__(self, path: str | Path | None) -> None:
+    ``extra_fields`` are columns after :data:`LOG_FIELDS` (the ``realism.*`` draws of
+    domain randomization)."""
+
+    def __init__(self, path: str | Path | None, extra_fields: tuple[str, ...] = ()) -> None:
         self.path = Path(path) if path else None
         self._fh: io.TextIOBase | None = None
         if self.path is not None:
@@ -124,7 +139,7 @@ class LogWriter:
             new = not self.path.exists() or self.path.stat().st_size == 0
             self._fh = open(self.path, "a", newline="", encoding="utf-8")  # noqa: SIM115
             if new:
-                self._write(list(LOG_FIELDS))
+                self._write([*LOG_FIELDS, *extra_fields])
 
     def _write(self, row: list[str]) -> None:
         buf = io.StringIO()
@@ -205,7 +220,7 @@ def train(
     cfg = env.config
     table = store.open(env.layout, sensor_signature(cfg), cfg.learner.q_init)
     first = int(table.meta.get("episodes", 0))
-    log = LogWriter(log_path)
+    log = LogWriter(log_path, tuple(env.randomizer.columns))
     progress = Progress()
     results: list[EpisodeResult] = []
     agent = QLearner(table, cfg.learner, np.random.default_rng(seed))
@@ -226,6 +241,7 @@ def train(
                 env.has_been_rescued,
                 agent.epsilon,
                 env.goal_name,
+                realism_values(env),
             )
             table.meta["episodes"] = e + 1
             store.save(table)
@@ -253,6 +269,7 @@ def train(
                 env.has_been_rescued,
                 agent.epsilon,
                 env.goal_name,
+                realism_values(env),
             )
             store.save(table)
             log.write(res)
@@ -278,6 +295,8 @@ class EvalResult:
     goal_rate: float
     end_of_world_rate: float
     truncated_rate: float
+    wrong_door_rate: float
+    """Stops at another door whose plate a camera misread (realism ``camera.misread``)."""
     mean_steps: float
     mean_bumps: float
     mean_reward: float
@@ -312,6 +331,7 @@ def evaluate(
         goal_rate=outcomes.count("goal") / n,
         end_of_world_rate=outcomes.count("end_of_world") / n,
         truncated_rate=outcomes.count("truncated") / n,
+        wrong_door_rate=outcomes.count("wrong_door") / n,
         mean_steps=float(np.mean(steps)) if steps else 0.0,
         mean_bumps=float(np.mean(bumps)) if bumps else 0.0,
         mean_reward=float(np.mean(rewards)) if rewards else 0.0,

@@ -253,6 +253,26 @@ class World:
             self._wake_only(movers)
             self._integrate(distance, movers, near_wall)
 
+    def drive(self, i: int, distance: float, turn: float) -> None:
+        """Robot ``i`` drives ``distance`` inches (negative: backwards) while its heading
+        turns by ``turn`` radians: the arc of a differential drive whose wheels differ
+        (the realism motion model, :class:`~koolio_pymunk.realism.MotionErrors`).
+
+        pymunk gets one velocity along the arc's chord (length ``distance *
+        sin(turn/2) / (turn/2)``, direction the heading plus ``turn / 2``) and resolves
+        every contact as in any move; the heading then turns by ``turn``. With ``turn`` 0
+        this is exactly :meth:`act`'s Forward / Reverse; ``distance`` 0 is a pure turn.
+        """
+        h = self.heading[i]
+        if distance != 0.0:
+            half = 0.5 * turn
+            chord = distance if half == 0.0 else distance * (math.sin(half) / half)
+            mid = h + half
+            self._set_velocity(self.bodies[i], (chord * math.cos(mid), chord * math.sin(mid)))
+            self._wake_only([i])
+            self._integrate(abs(chord), [i])
+        self.heading[i] = (h + turn) % TWO_PI
+
     def move(self, i: int, distance: float) -> None:
         """Move robot ``i`` alone by ``distance`` along its heading (negative: backwards)."""
         h = self.heading[i]

@@ -39,6 +39,15 @@ def test_fast_backend_agrees_with_noise_on() -> None:
     assert (got.distance_mismatches, got.state_mismatches) == (0, 0)
 
 
+@pytest.mark.parametrize("arena", ARENAS)
+def test_fast_backend_agrees_in_the_realistic_world(arena: str) -> None:
+    """koolio-real's realism models (incidence, range, beam model, missed and misread
+    plates) with the paper's noise: the same readings, echoes and flags, bit for bit."""
+    got = compare_backends(arena, 60, seed=12, noise="uniform", world="koolio-real")
+    assert (got.distance_mismatches, got.state_mismatches) == (0, 0)
+    assert got.bit_identical == 60
+
+
 def test_comparison_detects_a_moved_wall() -> None:
     """The check can fail: shift one wall of the fast engine by 1e-3 in."""
     cfg = SensorConfig()

@@ -1,17 +1,20 @@
 """Fast sensing backend vs the pymunk reference on random poses in every shipped arena.
 
-For each arena, ``--poses`` random free poses (noise off): counts the poses whose
-noise-free distances differ by more than 1e-6 in (or whose camera markers differ), the
-poses whose encoded state differs, and the poses whose every distance is bit-identical
-(:func:`koolio_pymunk.agreement.compare_backends`); then how often the exact-cone sonar
-model (``sensors.backend: cone``) encodes differently from the paper's sub-arcs
-(:func:`koolio_pymunk.agreement.cone_disagreement`). Arenas run in parallel, one process
-each (``--jobs``). Exits 1 on any fast/reference mismatch.
+For each arena and world (``--worlds``: the ideal world and ``koolio-real`` by default),
+``--poses`` random free poses (noise off unless ``--noise``): counts the poses whose
+noise-free distances differ by more than 1e-6 in (or whose camera markers differ; with
+realism models on, also each ray's incidence and the other plates in view), the poses
+whose encoded state or readings after the realism models differ, and the poses whose
+every distance is bit-identical (:func:`koolio_pymunk.agreement.compare_backends`);
+then, in the ideal world, how often the exact-cone sonar model (``sensors.backend:
+cone``) encodes differently from the paper's sub-arcs
+(:func:`koolio_pymunk.agreement.cone_disagreement`). Arena/world pairs run in parallel,
+one process each (``--jobs``). Exits 1 on any fast/reference mismatch.
 
     .venv/bin/python tools/agreement.py --poses 100000 --out agreement.json
 
-About 1 ms per pose (the pymunk reference is most of it): 100k poses x 3 arenas take
-about 3 minutes on 2 cores.
+About 1 ms per pose (the pymunk reference is most of it; 1 to 3 ms with koolio-real's
+models): 100k poses x 3 arenas take about 3 minutes per world on 2 cores.
 """
 
 from __future__ import annotations
@@ -25,20 +28,32 @@ from concurrent.futures import ProcessPoolExecutor
 ARENAS = ("hallway", "room", "obstacles")
 
 
-def one(arena: str, poses: int, seed: int, noise: str) -> dict:
+IDEAL = "ideal"
+
+
+def one(arena: str, poses: int, seed: int, noise: str, world: str) -> dict:
     from koolio_pymunk.agreement import compare_backends, cone_disagreement
 
     t = time.perf_counter()
-    out = compare_backends(arena, poses, seed=seed, noise=noise).as_dict()
+    laid = None if world == IDEAL else world
+    out = compare_backends(arena, poses, seed=seed, noise=noise, world=laid).as_dict()
+    out["world"] = world
     out["seconds"] = round(time.perf_counter() - t, 1)
-    out["cone"] = cone_disagreement(arena, poses, seed=seed).as_dict()
+    if world == IDEAL:
+        out["cone"] = cone_disagreement(arena, poses, seed=seed).as_dict()
     return out
 
 
-def run(poses: int, seed: int = 0, jobs: int = 2, noise: str = "none") -> list[dict]:
-    """Agreement figures per shipped arena (a list of dicts, one per arena)."""
+def run(
+    poses: int,
+    seed: int = 0,
+    jobs: int = 2,
+    noise: str = "none",
+    worlds: tuple[str, ...] = (IDEAL, "koolio-real"),
+) -> list[dict]:
+    """Agreement figures per shipped arena and world (a list of dicts)."""
     with ProcessPoolExecutor(max_workers=jobs) as pool:
-        futures = [pool.submit(one, a, poses, seed, noise) for a in ARENAS]
+        futures = [pool.submit(one, a, poses, seed, noise, w) for w in worlds for a in ARENAS]
         return [f.result() for f in futures]
 
 
@@ -48,21 +63,29 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--jobs", type=int, default=2, help="processes (2)")
     p.add_argument("--noise", default="none", help="noise model for the state check (none)")
+    p.add_argument(
+        "--worlds",
+        nargs="+",
+        default=[IDEAL, "koolio-real"],
+        help="worlds to check: 'ideal' and world profiles or files (ideal koolio-real)",
+    )
     p.add_argument("--out", default=None, help="write the figures as JSON here")
     args = p.parse_args(argv)
-    rows = run(args.poses, args.seed, args.jobs, args.noise)
+    rows = run(args.poses, args.seed, args.jobs, args.noise, tuple(args.worlds))
     print(
-        f"{'arena':>10} {'poses':>8} {'dist. mismatch':>15} {'state mismatch':>15} "
-        f"{'bit-identical':>14} {'max |diff| in':>14} {'s':>6}"
+        f"{'arena':>10} {'world':>12} {'poses':>8} {'dist. mismatch':>15} "
+        f"{'state mismatch':>15} {'bit-identical':>14} {'max |diff| in':>14} {'s':>6}"
     )
     for r in rows:
         print(
-            f"{r['arena']:>10} {r['poses']:>8} {r['distance_mismatches']:>15} "
+            f"{r['arena']:>10} {r['world']:>12} {r['poses']:>8} {r['distance_mismatches']:>15} "
             f"{r['state_mismatches']:>15} {r['bit_identical']:>14} "
             f"{r['max_abs_diff']:>14.3g} {r['seconds']:>6}"
         )
-    print("exact-cone sonar model (backend: cone) vs the paper's sub-arcs, after encoding:")
-    for r in rows:
+    cones = [r for r in rows if "cone" in r]
+    if cones:
+        print("exact-cone sonar model (backend: cone) vs the paper's sub-arcs, after encoding:")
+    for r in cones:
         c = r["cone"]
         print(
             f"{r['arena']:>10}: state differs on {c['state_differs']:.1%} of poses; per sonar "

@@ -5,6 +5,9 @@ Sections (each printed as a table row, all written to ``--out`` as JSON):
 * **reference / fast**: the single-robot training loop (epsilon-greedy, Q update, same
   code as ``koolio-pm train``) on the hallway with the pymunk reference sensors and with
   the fast backend, without file I/O: steps per second, and the fast/reference ratio;
+* **koolio-real**: the same fast loop in the realistic world (``--world koolio-real``:
+  every realism model on), next to the ideal world's row above: steps per second and
+  the ratio to the ideal world;
 * **train (end to end)**: :func:`training.train` as ``koolio-pm train`` runs it, saving
   the table (file + backup, fsynced) and the log at every episode end;
 * **N robots**: :func:`multi.train_many` with ``--robots`` robots, robot-steps per second;
@@ -65,14 +68,15 @@ def rates(steps: int, t: Timer) -> dict:
     }
 
 
-def make_env(backend: str, arena: str = "hallway"):
+def make_env(backend: str, arena: str = "hallway", world: str | None = None):
     from koolio_pymunk.config import load_config
     from koolio_pymunk.env import KoolioEnv
 
-    return KoolioEnv(arena, config=load_config(overrides={"sensors": {"backend": backend}}))
+    cfg = load_config(overrides={"sensors": {"backend": backend}}, world=world)
+    return KoolioEnv(arena, config=cfg)
 
 
-def learning_loop(backend: str, min_steps: int, seed: int = 0) -> dict:
+def learning_loop(backend: str, min_steps: int, seed: int = 0, world: str | None = None) -> dict:
     """The training loop of ``train`` without file I/O, for at least ``min_steps`` steps."""
     import numpy as np
 
@@ -80,7 +84,7 @@ def learning_loop(backend: str, min_steps: int, seed: int = 0) -> dict:
     from koolio_pymunk.qtable import QTable
     from koolio_pymunk.training import episode_seeds, run_episode
 
-    env = make_env(backend)
+    env = make_env(backend, world=world)
     table = QTable(env.layout, {}, env.config.learner.q_init)
     agent = QLearner(table, env.config.learner, np.random.default_rng(seed))
     env.reset(seed=0)
@@ -286,11 +290,16 @@ def main(argv: list[str] | None = None) -> int:
         ratio = fast["per_cpu_s"] / max(1, ref["per_cpu_s"])
         fast["ratio_to_reference_cpu"] = round(ratio, 1)
         print(table_line("fast backend steps/s", fast, f"x{ratio:.1f} reference"))
+        real = learning_loop("fast", 30_000 if q else 150_000, world="koolio-real")
+        real_ratio = real["per_cpu_s"] / max(1, fast["per_cpu_s"])
+        real["ratio_to_ideal_cpu"] = round(real_ratio, 3)
+        real["ratio_to_ideal_wall"] = round(real["per_wall_s"] / max(1, fast["per_wall_s"]), 3)
+        print(table_line("koolio-real world steps/s", real, f"{real_ratio:.0%} of ideal (CPU)"))
         e2e = end_to_end(50 if q else 200, folder)
         print(table_line("train end to end (saves) steps/s", e2e))
         multi = many(args.robots, 300 if q else 3000, folder)
         print(table_line(f"{args.robots} robots robot-steps/s", multi))
-        report.update(reference=ref, fast=fast, end_to_end=e2e, many=multi)
+        report.update(reference=ref, fast=fast, koolio_real=real, end_to_end=e2e, many=multi)
 
         comp = []
         for s in seeds:
