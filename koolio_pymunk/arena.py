@@ -23,6 +23,8 @@ the paper's simulator)::
 from __future__ import annotations
 
 import difflib
+import hashlib
+import json
 import math
 import os
 from collections.abc import Callable, Sequence
@@ -149,6 +151,22 @@ class Arena:
             doors=tuple(Door(d.name, rot(d.a), rot(d.b), rot(d.plate)) for d in self.doors),
             rotate_deg=0.0,
         )
+
+
+def arena_record(arena: Arena) -> dict[str, str]:
+    """What a Q-table records of the arena it was learned in: the name and a hash of the
+    content that matters to learning (walls, obstacles, goals, end-of-world markers and
+    zones, start, rotation; not the active goal, the doors' drawing or comments).
+
+    >>> rec = arena_record(load_arena("room"))
+    >>> rec["name"], len(rec["sha256"])
+    ('room', 16)
+    """
+    data = arena_to_dict(arena)
+    for key in ("name", "active_goal", "doors"):
+        data.pop(key, None)
+    text = json.dumps(data, sort_keys=True, separators=(",", ":"))
+    return {"name": arena.name, "sha256": hashlib.sha256(text.encode()).hexdigest()[:16]}
 
 
 def _ring(points: tuple[Point, ...]) -> list[tuple[Point, Point]]:
