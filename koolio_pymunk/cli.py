@@ -97,7 +97,11 @@ def add_learning_files_args(p: argparse.ArgumentParser) -> None:
         default=None,
         help="Q-table file, resumed if present; backup beside it (default runs/<arena>.qtable)",
     )
-    p.add_argument("--log", default=None, help="per-episode CSV log (default runs/<arena>.csv)")
+    p.add_argument(
+        "--log",
+        default=None,
+        help="per-episode CSV log (default runs/<arena>.csv; '' for none)",
+    )
 
 
 def resolve_files(args: argparse.Namespace) -> None:
@@ -110,7 +114,7 @@ def resolve_files(args: argparse.Namespace) -> None:
         args.qtable = table
     if getattr(args, "log", "") is None:
         args.log = log
-    for flag in ("qtable", "log", "init_qtable", "config", "world"):
+    for flag in ("qtable", "init_qtable", "config", "world"):  # --log '': no log
         value = getattr(args, flag, None)
         if value is not None:
             check_path(value, "--" + flag.replace("_", "-"))
@@ -331,8 +335,9 @@ def _seed_table(init_path: str, store, log: str, env, say) -> None:
             "instead (choose a new --qtable)"
         )
     try:
-        check_log_path(log, store.path)
-        if log_rows(log):
+        if log:
+            check_log_path(log, store.path)
+        if log and log_rows(log):
             raise KoolioError(
                 located(log, "", "holds rows of another run: give --init-qtable a new --log")
             )

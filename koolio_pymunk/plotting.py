@@ -27,8 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
+from .episode_log import MAX_LOG_BYTES
 from .errors import KoolioError, located
-from .files import atomic_write
+from .files import atomic_write, read_text
 
 REQUIRED = ("episode", "reward", "steps", "outcome")
 OUTCOMES = (
@@ -75,12 +76,7 @@ def read_log(path: str | Path) -> Log:
     """Read a training log; every problem is a one-line :class:`KoolioError`."""
     p = Path(path)
     source = str(p)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise KoolioError(located(source, "", "file not found")) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise KoolioError(located(source, "", f"cannot read: {exc}")) from None
+    text = read_text(p, MAX_LOG_BYTES, "training log")
     reader = csv.DictReader(io.StringIO(text))
     missing = [c for c in REQUIRED if c not in (reader.fieldnames or [])]
     if missing:
@@ -216,7 +212,6 @@ def plot_logs(logs: list[Log], out: str | Path, window: int = 50, title: str | N
     fig.savefig(buf, format="png", dpi=110)
     plt.close(fig)
     out = Path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
     atomic_write(out, buf.getvalue())
     return out
 
@@ -226,7 +221,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--log",
         action="append",
         default=None,
-        help="training log CSV (default runs/train.csv); repeat to compare runs",
+        help="training log CSV (default runs/hallway.csv); repeat to compare runs",
     )
     p.add_argument("--out", default="curve.png", help="PNG to write (default curve.png)")
     p.add_argument(
@@ -243,6 +238,8 @@ def run(args: argparse.Namespace) -> int:
         raise KoolioError(f"--window: must be >= 1, got {args.window}")
     if not str(args.out).lower().endswith(".png"):
         raise KoolioError(f"--out: {args.out}: must end in .png")
+    if Path(args.out).is_dir():
+        raise KoolioError(f"--out: {args.out}: is a folder, not a file")
     logs = [read_log(p) for p in (args.log or [DEFAULT_LOG])]
     out = plot_logs(logs, args.out, args.window, args.title)
     n = sum(len(log) for log in logs)
