@@ -249,6 +249,8 @@ def _looks_like_path(name: str) -> bool:
 
 def arena_path(name: str | Path) -> Path:
     """Resolve a built-in arena name (``hallway``, ``room``, ``obstacles``) or a path."""
+    if not str(name).strip():
+        _fail("''", "", "empty file name")
     if isinstance(name, Path) or _looks_like_path(name):
         return Path(name)
     for folder in builtin_arena_dirs():

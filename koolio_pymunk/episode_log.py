@@ -83,10 +83,7 @@ def _same_file(a: Path, b: Path) -> bool:
 
 
 def _read(p: Path) -> str:
-    try:
-        return read_text(p, MAX_LOG_BYTES, "training log")
-    except FileError as exc:
-        raise FileError(f"{exc} (not a training log?)") from None
+    return read_text(p, MAX_LOG_BYTES, "training log")
 
 
 def _check_header(p: Path, text: str) -> None:

@@ -217,8 +217,8 @@ def read_bytes(path: str | Path, limit: int | None = None, what: str = "file") -
                         located(
                             _name(path),
                             "",
-                            f"too large for a {what} ({human_size(size)}; "
-                            f"the limit is {human_size(limit)})",
+                            f"too large: {human_size(size)} (the limit for {what}s is "
+                            f"{human_size(limit)})",
                         )
                     )
             data = fh.read() if limit is None else fh.read(limit + 1)
@@ -230,7 +230,7 @@ def read_bytes(path: str | Path, limit: int | None = None, what: str = "file") -
         raise file_error(path, "read", exc) from None
     if limit is not None and len(data) > limit:  # grew while read, or not a regular file
         raise FileError(
-            located(_name(path), "", f"too large for a {what} (the limit is {human_size(limit)})")
+            located(_name(path), "", f"too large (the limit for {what}s is {human_size(limit)})")
         )
     return data
 
