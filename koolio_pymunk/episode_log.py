@@ -136,13 +136,8 @@ class LogWriter:
         check_log_path(self.path, table)
         self._lock = FileLock(self.path, purpose).acquire()
         try:
-            make_parent(self.path)
             if episodes is not None and self.path.exists():
                 self._reconcile(episodes, fresh, table)
-            new = not self.path.exists() or self.path.stat().st_size == 0
-            self._fh = open(self.path, "a", newline="", encoding="utf-8")  # noqa: SIM115
-            if new:
-                self._write(list(LOG_FIELDS))
         except OSError as exc:
             self.close()
             raise file_error(self.path, "write", exc) from None
@@ -185,28 +180,43 @@ class LogWriter:
         removed = lines[keep:-1] + ([lines[-1]] if torn else [])
         numbers = _numbers(removed)
         atomic_write(p, ("\n".join(lines[:keep]) + "\n").encode("utf-8"))
-        span = f"episodes {numbers[0]}..{numbers[-1]}" if numbers else "a torn row"
+        if not numbers:
+            span = "a torn row"
+        elif numbers[0] == numbers[-1]:
+            span = f"episode {numbers[0]}"
+        else:
+            span = f"episodes {numbers[0]}..{numbers[-1]}"
+        rows = "1 row" if len(removed) == 1 else f"{len(removed)} rows"
         self._warn(
-            f"{p}: removed {len(removed)} rows ({span}): the Q-table {table or ''} holds "
-            f"{episodes} episodes (it was saved before them); they run again"
+            f"{p}: removed {rows} ({span}): the Q-table {table or ''} holds {episodes} "
+            "episodes (it was saved before them); they run again"
         )
 
     # -- writing -------------------------------------------------------------------------
-    def _write(self, row: list[str]) -> None:
-        buf = io.StringIO()
-        csv.writer(buf, lineterminator="\n").writerow(row)
-        assert self._fh is not None
-        try:
-            self._fh.write(buf.getvalue())
-            self._fh.flush()
-        except OSError as exc:
-            assert self.path is not None
-            raise file_error(self.path, "write", exc) from None
+    def _open(self) -> io.TextIOBase:
+        """The file, opened at the first row (a run that fails before its first episode
+        ends creates no log); a new or empty log gets the header first."""
+        assert self.path is not None
+        if self._fh is None:
+            make_parent(self.path)
+            new = not self.path.exists() or self.path.stat().st_size == 0
+            self._fh = open(self.path, "a", newline="", encoding="utf-8")  # noqa: SIM115
+            if new:
+                self._fh.write(HEADER + "\n")
+        return self._fh
 
     def write(self, result: Any) -> None:
         """Append ``result.row()`` (an :class:`~koolio_pymunk.training.EpisodeResult`)."""
-        if self._fh is not None:
-            self._write(result.row())
+        if self.path is None:
+            return
+        buf = io.StringIO()
+        csv.writer(buf, lineterminator="\n").writerow(result.row())
+        try:
+            fh = self._open()
+            fh.write(buf.getvalue())
+            fh.flush()
+        except OSError as exc:
+            raise file_error(self.path, "write", exc) from None
 
     def close(self) -> None:
         if self._fh is not None:

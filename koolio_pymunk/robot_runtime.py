@@ -756,13 +756,23 @@ def atomic_write_text(path: str, text: str) -> None:
 
 
 class EpisodeLog:
-    """Appends one CSV row per episode, in ``koolio-pm train``'s log format."""
+    """Appends one CSV row per episode, in ``koolio-pm train``'s log format. A file that
+    exists must already be such a log (its first line the header): anything else is
+    refused with a :class:`PolicyError` and left untouched."""
 
     def __init__(self, path: str) -> None:
         self.path = path
         new = not os.path.exists(path) or os.path.getsize(path) == 0
         if new:
             self._write(list(LOG_FIELDS))
+            return
+        try:
+            with open(path, "rb") as fh:
+                first = fh.readline(1000).rstrip(b"\r\n")
+        except OSError as exc:
+            raise _err(path, "", f"cannot read: {exc.strerror}") from None
+        if first != ",".join(LOG_FIELDS).encode():
+            raise _err(path, "line 1", "not a training log (its first line is not the header)")
 
     def _write(self, row: list[str]) -> None:
         buf = io.StringIO()
