@@ -68,8 +68,11 @@ _NOTE_AT = 1
 
 
 def lock_path(target: str | Path) -> Path:
-    """The lock file of ``target``: ``<target>.lock`` beside it."""
+    """The lock file of ``target``: ``<target>.lock`` beside it (beside the file a symbolic
+    link points to, so that two names of one file share one lock)."""
     target = Path(target)
+    if target.is_symlink():
+        target = Path(os.path.realpath(target))
     return target.with_name(target.name + ".lock")
 
 

@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import json
 import math
+import stat
 import struct
 import sys
 import zlib
@@ -51,7 +52,7 @@ from typing import Any
 import numpy as np
 
 from .errors import FileError, QTableError, located
-from .files import atomic_write, file_error, remove_stale_temps
+from .files import atomic_write, file_error, read_bytes, remove_stale_temps
 from .locks import FileLock
 
 MAGIC = b"KOOLIOQT"
@@ -62,6 +63,8 @@ MAX_KEYWORD_BITS = 64
 #: Largest number of codes of one state field, and of actions, a file may declare.
 MAX_LEVELS = 1 << 16
 MAX_ACTIONS = 64
+#: Largest table file read (the paper's whole dense table would be 114 MiB).
+MAX_TABLE_BYTES = 1 << 30
 
 
 @dataclass(frozen=True)
@@ -441,9 +444,11 @@ class QTableStore:
         main_err: QTableError | None = None
         if self.path.exists():
             try:
-                data = self.path.read_bytes()
-            except OSError as exc:  # unreadable: refused, never replaced by the backup
-                raise _unreadable(self.path, exc) from None
+                data = _read_table(self.path)
+            except FileError as exc:  # unreadable: refused, never replaced by the backup
+                raise FileError(
+                    f"{exc} (fix it and run again; its backup is not used in its place)"
+                ) from None
             try:
                 table = QTable.from_bytes(data, str(self.path))
                 self._last = data
@@ -452,10 +457,10 @@ class QTableStore:
                 main_err = exc
         if self.backup.exists():
             try:
-                data = self.backup.read_bytes()
+                data = _read_table(self.backup)
                 table = QTable.from_bytes(data, str(self.backup))
-            except (QTableError, OSError) as exc:
-                why = str(exc) if isinstance(exc, QTableError) else f"cannot read ({exc.strerror})"
+            except (QTableError, FileError) as exc:
+                why = str(exc)
                 if main_err is not None:
                     raise QTableError(f"{main_err}; backup unusable too: {why}") from None
                 raise QTableError(
@@ -470,18 +475,23 @@ class QTableStore:
         return None
 
 
-def _unreadable(path: Path, exc: OSError) -> FileError:
-    err = file_error(path, "read", exc)
-    return FileError(f"{err} (fix it and run again; its backup is not used in its place)")
+def _read_table(path: Path) -> bytes:
+    """A table file's bytes (a regular file of at most :data:`MAX_TABLE_BYTES`)."""
+    try:
+        if not stat.S_ISREG(path.stat().st_mode):
+            raise FileError(located(str(path), "", "not a regular file"))
+    except OSError as exc:
+        raise file_error(path, "read", exc) from None
+    return read_bytes(path, MAX_TABLE_BYTES, "Q-table file")
 
 
 def load_qtable(path: str | Path) -> QTable:
     """Read a table file (no backup fallback); QTableError when missing or bad."""
     p = Path(path)
     try:
-        data = p.read_bytes()
-    except OSError as exc:
-        raise QTableError(located(str(p), "", f"cannot read: {exc.strerror}")) from None
+        data = _read_table(p)
+    except FileError as exc:
+        raise QTableError(str(exc)) from None
     return QTable.from_bytes(data, str(p))
 
 

@@ -65,6 +65,8 @@ from typing import Any
 
 FORMAT = "koolio-policy"
 VERSION = 1
+#: Largest policy file read (a table of a million states is about 300 MiB of JSON).
+MAX_POLICY_BYTES = 1 << 30
 #: The paper's five actions; an action's index is the low bits of the keyword.
 ACTION_NAMES = ("Stop", "RotateLeft", "RotateRight", "Forward", "Reverse")
 STOP = 0
@@ -276,10 +278,14 @@ class Policy:
     def load(cls, path: str) -> Policy:
         """Read and validate a policy file; PolicyError (one line) when it is bad."""
         try:
-            with open(path, encoding="utf-8") as fh:
-                text = fh.read()
+            with open(path, "rb") as fh:
+                data = fh.read(MAX_POLICY_BYTES + 1)
         except OSError as exc:
             raise _err(str(path), "", f"cannot read: {exc.strerror}") from None
+        if len(data) > MAX_POLICY_BYTES:
+            raise _err(str(path), "", f"larger than {MAX_POLICY_BYTES >> 20} MiB: not a policy")
+        try:
+            text = data.decode("utf-8")
         except UnicodeDecodeError:
             raise _err(str(path), "", "not a policy file (not UTF-8 text)") from None
         return cls.loads(text, str(path))
