@@ -1,6 +1,6 @@
 """Plot the learning curve of a training log (return, outcomes, steps per episode).
 
-``koolio-pm plot --log runs/train.csv --out curve.png`` reads the per-episode CSV that
+``koolio-pm plot --log runs/hallway.csv --out curve.png`` reads the per-episode CSV that
 ``koolio-pm train`` and ``koolio-pm view`` append to (see :mod:`koolio_pymunk.training`)
 and draws, against the episode number:
 
