@@ -268,8 +268,8 @@ def arena_path(name: str | Path) -> Path:
     )
 
 
-#: Largest arena file read (the hallway is 2 KiB).
-MAX_ARENA_BYTES = 4 * 1024 * 1024
+#: Largest arena file read (the hallway is 2 KiB; a wall of 10,000 points about 250 KiB).
+MAX_ARENA_BYTES = 1024 * 1024
 #: Most points of one polygon (walls, an obstacle or a zone), and of all of them together.
 MAX_POLYGON_POINTS = 10_000
 MAX_TOTAL_POINTS = 20_000

@@ -286,7 +286,7 @@ def config_path(name: str | Path) -> Path:
 
 
 #: Largest configuration or world file read.
-MAX_CONFIG_BYTES = 1024 * 1024
+MAX_CONFIG_BYTES = 256 * 1024
 
 
 def read_config_file(path: str | Path) -> tuple[dict, str]:

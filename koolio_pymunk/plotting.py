@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import csv
 import io
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -65,11 +66,13 @@ def _field(row: dict, name: str, kind, source: str, line: int):
             raise KoolioError(located(source, f"line {line}", f"{name}: missing"))
         return kind(0)
     try:
-        return kind(value)
+        number = kind(value)
     except ValueError:
-        raise KoolioError(
-            located(source, f"line {line}", f"{name}: not a number: {value!r}")
-        ) from None
+        number = None
+    if number is None or abs(number) > 2**53 or not math.isfinite(number):
+        shown = value if len(value) <= 30 else value[:27] + "..."
+        raise KoolioError(located(source, f"line {line}", f"{name}: not a number: {shown!r}"))
+    return number
 
 
 def read_log(path: str | Path) -> Log:

@@ -126,7 +126,7 @@ EVAL_SEED_OFFSET = 1_000_000
 #: Most runs (configurations x seeds) one spec may plan.
 MAX_RUNS = 10_000
 #: Largest spec file read.
-MAX_SPEC_BYTES = 1024 * 1024
+MAX_SPEC_BYTES = 256 * 1024
 
 
 # --- command line ---------------------------------------------------------------------
