@@ -21,14 +21,14 @@ the log and the table can disagree after a stop:
   or the rows of one save with ``--robots N``); resuming warns and goes on;
 * rows are ahead when the table holds fewer episodes than the log: ``--robots N`` saves
   every N episodes, and a torn table falls back to its backup. Those episodes' learning
-  is not in the table and their numbers will be run again, so resuming **removes** those
-  rows (and the interrupted rows after them) from the log, with a warning, before
-  appending: episode numbers never repeat (except after an ``interrupted`` row, by
-  design);
+  is not in the table and their numbers will be run again, so resuming **moves** those
+  rows (and the interrupted rows after them) out of the log into ``<log>.removed`` (a log
+  too, so nothing is lost), with a warning, before appending: episode numbers never
+  repeat (except after an ``interrupted`` row, by design);
 * a new table (no table file, no backup) with a log that already holds rows is refused:
   that log belongs to another run.
 
-A torn last row (no line end) is removed the same way.
+A torn last row (no line end) is moved the same way.
 """
 
 from __future__ import annotations
@@ -179,6 +179,8 @@ class LogWriter:
         keep = len(lines) - 1 if cut is None else cut
         removed = lines[keep:-1] + ([lines[-1]] if torn else [])
         numbers = _numbers(removed)
+        kept = removed_path(p)
+        _append_rows(kept, removed)  # first: a crash between the two writes loses nothing
         atomic_write(p, ("\n".join(lines[:keep]) + "\n").encode("utf-8"))
         if not numbers:
             span = "a torn row"
@@ -188,8 +190,8 @@ class LogWriter:
             span = f"episodes {numbers[0]}..{numbers[-1]}"
         rows = "1 row" if len(removed) == 1 else f"{len(removed)} rows"
         self._warn(
-            f"{p}: removed {rows} ({span}): the Q-table {table or ''} holds {episodes} "
-            "episodes (it was saved before them); they run again"
+            f"{p}: moved {rows} ({span}) to {kept}: the Q-table {table or ''} holds "
+            f"{episodes} episodes (it was saved before them); they run again"
         )
 
     # -- writing -------------------------------------------------------------------------
@@ -226,6 +228,21 @@ class LogWriter:
         if self._lock is not None:
             self._lock.release()
             self._lock = None
+
+
+def removed_path(log: Path) -> Path:
+    """Where rows taken out of ``log`` are kept: ``<log>.removed`` (a log too)."""
+    return log.with_name(log.name + ".removed")
+
+
+def _append_rows(path: Path, lines: list[str]) -> None:
+    """Append ``lines`` to the log ``path`` (created with the header), atomically."""
+    old = read_text(path, MAX_LOG_BYTES, "training log") if path.exists() else ""
+    if not old:
+        old = HEADER + "\n"
+    elif not old.endswith("\n"):
+        old += "\n"
+    atomic_write(path, (old + "".join(ln + "\n" for ln in lines)).encode("utf-8"))
 
 
 def _row_fields(p: Path, n: int, line: str) -> list[str]:

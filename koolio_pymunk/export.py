@@ -25,6 +25,7 @@ from . import robot_runtime as rt
 from .config import Config, load_config
 from .errors import QTableError, located
 from .files import atomic_write, check_path, os_problem
+from .locks import FileLock
 from .qtable import MAGIC, KeywordLayout, QTable, load_qtable
 
 WRITTEN_BY = "koolio-pm export"
@@ -64,8 +65,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     table = load_any_table(args.qtable)
     out = check_path(args.out, "--out")
-    if out.suffix == ".qtable":
-        atomic_write(out, table.to_bytes())
+    if out.suffix == ".qtable":  # a table: not while a run writes it
+        with FileLock(out, "koolio-pm export"):
+            atomic_write(out, table.to_bytes())
         print(f"wrote {out}: {len(table)} states, {table.meta.get('episodes', 0)} episodes")
         return 0
     cfg = load_config(args.config, world=args.world)

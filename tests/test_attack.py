@@ -242,9 +242,14 @@ def test_resume_removes_rows_the_table_does_not_hold(work, capsys):
     code, _, err = run_cli(capsys, *TRAIN, "--qtable", "q.qtable", "--log", "q.csv",
                            "--episodes", "2")  # fmt: skip
     assert code == 0
-    assert "q.csv: removed 3 rows (episodes 3..4)" in err
+    assert "q.csv: moved 3 rows (episodes 3..4) to q.csv.removed" in err
     agree(work / "q.qtable", work / "q.csv")
     assert load_qtable(work / "q.qtable").meta["episodes"] == 5
+    assert (work / "q.csv.removed").read_text().splitlines()[1:] == [
+        "3,-5,30,0,truncated,0,0.15,201",
+        "4,-5,30,0,truncated,0,0.15,201",
+        "4,-1",
+    ]  # nothing lost
 
 
 def test_torn_table_falls_back_to_its_backup_without_repeating_numbers(work, capsys):
@@ -253,7 +258,7 @@ def test_torn_table_falls_back_to_its_backup_without_repeating_numbers(work, cap
     code, _, err = run_cli(capsys, *TRAIN, "--qtable", "q.qtable", "--log", "q.csv",
                            "--episodes", "2")  # fmt: skip
     assert code == 0
-    assert "using the backup" in err and "q.csv: removed 1 row (episode 2)" in err
+    assert "using the backup" in err and "q.csv: moved 1 row (episode 2)" in err
     agree(work / "q.qtable", work / "q.csv")
     assert load_qtable(work / "q.qtable").meta["episodes"] == 4
 
