@@ -159,7 +159,7 @@ def check_sensor_signature(sensors: dict[str, Any], source: str) -> None:
 
     for key in _SIGNATURE_LISTS:
         value = sensors.get(key)
-        if not isinstance(value, list) or not all(_finite(v) for v in value):
+        if not isinstance(value, list) or not all(rt.is_number(v) for v in value):
             raise bad(key, "a list of numbers")
     groups = sensors.get("sonar_groups")
     if not isinstance(groups, list) or not all(
@@ -167,19 +167,10 @@ def check_sensor_signature(sensors: dict[str, Any], source: str) -> None:
         for g in groups
     ):
         raise bad("sonar_groups", "a list of lists of sonar indices")
-    if not _finite(sensors.get("max_camera_view")):
+    if not rt.is_number(sensors.get("max_camera_view")):
         raise bad("max_camera_view", "a number")
     if not isinstance(sensors.get("compass_in_state"), bool):
         raise bad("compass_in_state", "true or false")
-
-
-def _finite(v: Any) -> bool:
-    if isinstance(v, bool) or not isinstance(v, (int, float)):
-        return False
-    try:
-        return math.isfinite(v)
-    except OverflowError:
-        return False
 
 
 def write_policy(doc: dict[str, Any], out: Path) -> None:

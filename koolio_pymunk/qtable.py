@@ -54,6 +54,7 @@ import numpy as np
 from .errors import FileError, QTableError, located
 from .files import atomic_write, file_error, read_bytes, remove_stale_temps
 from .locks import FileLock
+from .robot_runtime import is_number
 
 MAGIC = b"KOOLIOQT"
 FORMAT_VERSION = 1
@@ -255,15 +256,6 @@ def _is_int(v: Any) -> bool:
     return isinstance(v, int) and not isinstance(v, bool)
 
 
-def _is_finite(v: Any) -> bool:
-    if isinstance(v, bool) or not isinstance(v, (int, float)):
-        return False
-    try:
-        return math.isfinite(v)
-    except OverflowError:  # an integer beyond the float range
-        return False
-
-
 def check_header(header: Any, source: str) -> tuple[KeywordLayout, float]:
     """Check every field of a table file's JSON header; pops ``format``, ``layout`` and
     ``q_init`` (the rest is the table's ``meta``). Returns the layout and ``q_init``."""
@@ -279,7 +271,7 @@ def check_header(header: Any, source: str) -> tuple[KeywordLayout, float]:
         )
     layout = _check_layout(header.pop("layout", None), source)
     q_init = header.pop("q_init", 0.0)
-    if not _is_finite(q_init):
+    if not is_number(q_init):
         raise bad("q_init", f"must be a finite number, got {_show(q_init)}")
     episodes = header.get("episodes", 0)
     if not _is_int(episodes) or episodes < 0:

@@ -554,13 +554,13 @@ def validate_document(doc: Any, source: str = "<policy>") -> None:
         raise _err(
             source, "actions", f"must be a list of {doc['layout']['n_actions']} action names"
         )
-    if not _is_number(doc["q_init"]):
+    if not is_number(doc["q_init"]):
         raise _err(source, "q_init", "must be a finite number")
     if not _is_int(doc["episodes"]) or not 0 <= doc["episodes"] < 1 << 63:
         raise _err(source, "episodes", "must be an integer >= 0")
     for key in ("learner", "rewards"):
         sec = doc.get(key) or {}
-        if not isinstance(sec, dict) or not all(_is_number(v) for v in sec.values()):
+        if not isinstance(sec, dict) or not all(is_number(v) for v in sec.values()):
             raise _err(source, key, "must map names to finite numbers")
     _check_entries(doc, source)
 
@@ -618,7 +618,7 @@ def _check_encoding(doc: dict[str, Any], source: str) -> None:
         raise _err(source, "encoding.thresholds", "must map sonar and camera to lists")
     for name in ("sonar", "camera"):
         values = ths.get(name)
-        if not isinstance(values, list) or not all(_is_number(v) for v in values):
+        if not isinstance(values, list) or not all(is_number(v) for v in values):
             raise _err(source, f"encoding.thresholds.{name}", "must be a list of finite numbers")
         if len(values) > MAX_SENSORS:
             raise _err(source, f"encoding.thresholds.{name}", "too many thresholds")
@@ -633,7 +633,7 @@ def _check_encoding(doc: dict[str, Any], source: str) -> None:
         or not all(isinstance(g, list) and all(_is_int(i) for i in g) for g in groups)
     ):
         raise _err(source, "encoding.sonar_groups", "must be a list of lists of sonar indices")
-    if not _is_number(enc.get("max_camera_view")):
+    if not is_number(enc.get("max_camera_view")):
         raise _err(source, "encoding.max_camera_view", "must be a finite number")
     if not isinstance(enc.get("compass_in_state"), bool):
         raise _err(source, "encoding.compass_in_state", "must be true or false")
@@ -663,7 +663,7 @@ def _check_entries(doc: dict[str, Any], source: str) -> None:
     seen = set()
     for i, e in enumerate(entries):
         item = f"entries[{i}]"
-        if not isinstance(e, dict) or not _is_int(e.get("keyword")) or not _is_number(e.get("q")):
+        if not isinstance(e, dict) or not _is_int(e.get("keyword")) or not is_number(e.get("q")):
             raise _err(source, item, "needs an integer keyword and a finite number q")
         kw = e["keyword"]
         if not 0 <= kw < limit or (kw & amask) >= layout.n_actions:
@@ -682,8 +682,13 @@ def _is_int(v: Any) -> bool:
     return isinstance(v, int) and not isinstance(v, bool)
 
 
-def _is_number(v: Any) -> bool:
-    """A finite int or float (an integer beyond the float range is not)."""
+def is_number(v: Any) -> bool:
+    """A finite int or float, not a bool (an integer beyond the float range is not).
+    The simulator's readers use this one too.
+
+    >>> [is_number(v) for v in (1, 2.5, True, float("inf"), 10**400, "1")]
+    [True, True, False, False, False, False]
+    """
     if isinstance(v, bool) or not isinstance(v, (int, float)):
         return False
     try:
