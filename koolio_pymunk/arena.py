@@ -371,6 +371,8 @@ def _goal_name(value: object, source: str, item: str) -> str:
     name = str(value).strip()
     if not name:
         _fail(source, item, "empty name")
+    if not name.isprintable():  # names go into logs, one row per line
+        _fail(source, item, f"control characters in the name: {_show(name)}")
     return name
 
 
@@ -465,6 +467,8 @@ def _parse_name(data: dict, source: str) -> str:
     name = data["name"]
     if isinstance(name, bool) or not isinstance(name, (str, int)) or not str(name).strip():
         _fail(source, "name", f"not a non-empty string: {_show(name)}")
+    if not str(name).strip().isprintable():
+        _fail(source, "name", f"control characters in the name: {_show(name)}")
     return str(name).strip()
 
 

@@ -628,6 +628,8 @@ ARENA = (ROOT / "arenas" / "room.yaml").read_text()
         (ARENA + "#" * (50 * 1024 * 1024),
          ["too large: 50 MiB", "the limit for arena files is 1 MiB"]),
         (ARENA.replace("name: room", "name: room\nname: hall"), ["duplicate key 'name'"]),
+        (ARENA.replace("- name: '201'\n  at:", '- name: "20\\n1"\n  at:', 1),
+         ["goals[0].name: control characters in the name"]),
         ("name: x\nwalls: [" + "[0, 0], " * 10_001 + "]\ngoals: []\nstart: {at: [0, 0]}\n",
          ["walls: 10,001 points (the limit is 10,000)"]),
     ],
