@@ -9,8 +9,8 @@ the paper's simulator)::
     goals:                            # one or more named goals (office doors)
       - {name: "317", at: [x, y]}
     active_goal: "317"                # optional; default the first goal
-    end_of_world:                     # markers the cameras see, each with the zone that ends
-      - {at: [x, y], zone: [[x, y], ...]}   # the episode; zone optional (see Marker)
+    end_of_world:                     # optional: markers the cameras see, each with the zone
+      - {at: [x, y], zone: [[x, y], ...]}   # that ends the episode; zone optional (Marker)
     start: {at: [x, y], heading_deg: null}  # null = random heading every episode
     doors:                            # optional, drawing only: door span and its number plate
       - {name: "317", a: [x, y], b: [x, y], plate: [x, y]}
@@ -22,8 +22,9 @@ the paper's simulator)::
 
 from __future__ import annotations
 
-import contextlib
 import difflib
+import hashlib
+import json
 import math
 import os
 from collections.abc import Callable, Sequence
@@ -33,7 +34,7 @@ from typing import NoReturn
 
 import yaml
 
-from koolio_pymunk import geometry
+from koolio_pymunk import geometry, yamlfile
 from koolio_pymunk.errors import ArenaError, located
 from koolio_pymunk.files import atomic_write_text
 
@@ -152,6 +153,22 @@ class Arena:
         )
 
 
+def arena_record(arena: Arena) -> dict[str, str]:
+    """What a Q-table records of the arena it was learned in: the name and a hash of the
+    content that matters to learning (walls, obstacles, goals, end-of-world markers and
+    zones, start, rotation; not the active goal, the doors' drawing or comments).
+
+    >>> rec = arena_record(load_arena("room"))
+    >>> rec["name"], len(rec["sha256"])
+    ('room', 16)
+    """
+    data = arena_to_dict(arena)
+    for key in ("name", "active_goal", "doors"):
+        data.pop(key, None)
+    text = json.dumps(data, sort_keys=True, separators=(",", ":"))
+    return {"name": arena.name, "sha256": hashlib.sha256(text.encode()).hexdigest()[:16]}
+
+
 def _ring(points: tuple[Point, ...]) -> list[tuple[Point, Point]]:
     return [(points[i], points[(i + 1) % len(points)]) for i in range(len(points))]
 
@@ -180,7 +197,7 @@ TOP_KEYS = (
     "doors",
     "rotate_deg",
 )
-REQUIRED_TOP_KEYS = ("name", "walls", "goals", "end_of_world", "start")
+REQUIRED_TOP_KEYS = ("name", "walls", "goals", "start")
 GOAL_KEYS = ("name", "at")
 MARKER_KEYS = ("at", "zone")
 START_KEYS = ("at", "heading_deg")
@@ -232,6 +249,8 @@ def _looks_like_path(name: str) -> bool:
 
 def arena_path(name: str | Path) -> Path:
     """Resolve a built-in arena name (``hallway``, ``room``, ``obstacles``) or a path."""
+    if not str(name).strip():
+        _fail("''", "", "empty file name")
     if isinstance(name, Path) or _looks_like_path(name):
         return Path(name)
     for folder in builtin_arena_dirs():
@@ -249,58 +268,25 @@ def arena_path(name: str | Path) -> Path:
     )
 
 
+#: Largest arena file read (the hallway is 2 KiB; a wall of 10,000 points about 250 KiB).
+MAX_ARENA_BYTES = 1024 * 1024
+#: Most points of one polygon (walls, an obstacle or a zone), and of all of them together.
+MAX_POLYGON_POINTS = 10_000
+MAX_TOTAL_POINTS = 20_000
+#: Most entries of each list (obstacles, goals, end-of-world markers, doors).
+MAX_ENTRIES = 1_000
+
+
 def read_yaml(path: Path, source: str) -> object:
     """Read and parse a YAML file; every failure is a one-line :class:`ArenaError`."""
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        _fail(source, "", "file not found")
-    except IsADirectoryError:
-        _fail(source, "", "is a directory, not a file")
-    except UnicodeDecodeError:
-        _fail(source, "", "not a UTF-8 text file")
-    except OSError as exc:
-        _fail(source, "", f"cannot read: {exc.strerror or exc}")
-    return parse_yaml_text(text, source)
-
-
-class _UniqueKeyLoader(yaml.SafeLoader):
-    """A safe YAML loader that rejects a key given twice in one mapping."""
-
-
-def _construct_unique_mapping(loader: yaml.SafeLoader, node: yaml.MappingNode) -> dict:
-    loader.flatten_mapping(node)
-    seen: set = set()
-    for key_node, _ in node.value:
-        key = loader.construct_object(key_node, deep=True)
-        with contextlib.suppress(TypeError):
-            if key in seen:
-                raise yaml.constructor.ConstructorError(
-                    None, None, f"duplicate key {key!r}", key_node.start_mark
-                )
-            seen.add(key)
-    return loader.construct_mapping(node, deep=True)
-
-
-_UniqueKeyLoader.add_constructor(
-    yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_unique_mapping
-)
+    return yamlfile.read_yaml(path, source, ArenaError, MAX_ARENA_BYTES, "arena file")
 
 
 def parse_yaml_text(text: str, source: str) -> object:
-    """Safe-load YAML; errors become ``source: line N: not valid YAML: ...``.
-
-    Unlike ``yaml.safe_load``, a key repeated in one mapping is an error.
+    """Safe-load YAML (:mod:`koolio_pymunk.yamlfile`); errors become ``source: line N: not
+    valid YAML: ...``. Unlike ``yaml.safe_load``, a key repeated in one mapping is an error.
     """
-    try:
-        return yaml.load(text, Loader=_UniqueKeyLoader)
-    except yaml.MarkedYAMLError as exc:
-        mark = exc.problem_mark or exc.context_mark
-        where = f"line {mark.line + 1}" if mark is not None else ""
-        problem = exc.problem or exc.context or "syntax error"
-        _fail(source, where, f"not valid YAML: {problem}")
-    except yaml.YAMLError as exc:
-        _fail(source, "", f"not valid YAML: {exc}")
+    return yamlfile.parse_yaml(text, source, ArenaError)
 
 
 def load_arena(path_or_name: str | Path, robot_radius: float = 10.0) -> Arena:
@@ -341,24 +327,40 @@ def _list(value: object, source: str, item: str, what: str) -> list:
     return value
 
 
+#: Largest coordinate accepted, inches (25 km: far beyond any building).
+MAX_COORDINATE = 1_000_000.0
+
+
 def _number(value: object, source: str, item: str) -> float:
     """A finite int or float (not a bool, not a string)."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         _fail(source, item, f"not a number: {_show(value)}")
-    x = float(value)
+    try:
+        x = float(value)
+    except OverflowError:  # an integer beyond the float range
+        x = math.inf
     if not math.isfinite(x):
         _fail(source, item, f"not a finite number: {_show(value)}")
+    return x
+
+
+def _coordinate(value: object, source: str, item: str) -> float:
+    x = _number(value, source, item)
+    if abs(x) > MAX_COORDINATE:
+        _fail(source, item, f"coordinate {_show(value)} beyond +-{MAX_COORDINATE:,.0f} in")
     return x
 
 
 def _point(value: object, source: str, item: str) -> Point:
     if not isinstance(value, (list, tuple)) or len(value) != 2:
         _fail(source, item, f"not a point [x, y]: {_show(value)}")
-    return (_number(value[0], source, item), _number(value[1], source, item))
+    return (_coordinate(value[0], source, item), _coordinate(value[1], source, item))
 
 
 def _points(value: object, source: str, item: str) -> tuple[Point, ...]:
     items = _list(value, source, item, "expected a list of points [[x, y], ...]")
+    if len(items) > MAX_POLYGON_POINTS:
+        _fail(source, item, f"{len(items):,} points (the limit is {MAX_POLYGON_POINTS:,})")
     return tuple(_point(p, source, f"{item}[{i}]") for i, p in enumerate(items))
 
 
@@ -369,6 +371,8 @@ def _goal_name(value: object, source: str, item: str) -> str:
     name = str(value).strip()
     if not name:
         _fail(source, item, "empty name")
+    if not name.isprintable():  # names go into logs, one row per line
+        _fail(source, item, f"control characters in the name: {_show(name)}")
     return name
 
 
@@ -412,20 +416,35 @@ def _parse_door(value: object, source: str, item: str) -> Door:
     )
 
 
-def _parse_entries(data: dict, key: str, source: str, parse: Callable) -> tuple:
+def _entries(data: dict, key: str, source: str, what: str) -> list:
     raw = data.get(key)
     if raw is None:
-        return ()
-    entries = _list(raw, source, key, f"expected a list of {key} entries")
+        return []
+    entries = _list(raw, source, key, what)
+    if len(entries) > MAX_ENTRIES:
+        _fail(source, key, f"{len(entries):,} entries (the limit is {MAX_ENTRIES:,})")
+    return entries
+
+
+def _parse_entries(data: dict, key: str, source: str, parse: Callable) -> tuple:
+    entries = _entries(data, key, source, f"expected a list of {key} entries")
     return tuple(parse(v, source, f"{key}[{i}]") for i, v in enumerate(entries))
 
 
 def _parse_obstacles(data: dict, source: str) -> tuple[tuple[Point, ...], ...]:
-    raw = data.get("obstacles")
-    if raw is None:
-        return ()
-    polys = _list(raw, source, "obstacles", "expected a list of polygons")
+    polys = _entries(data, "obstacles", source, "expected a list of polygons")
     return tuple(_points(p, source, f"obstacles[{i}]") for i, p in enumerate(polys))
+
+
+def _check_total_points(arena: Arena, source: str) -> None:
+    total = len(arena.walls) + sum(len(p) for p in arena.obstacles)
+    total += sum(len(m.zone) for m in arena.end_of_world if m.zone is not None)
+    if total > MAX_TOTAL_POINTS:
+        _fail(
+            source,
+            "",
+            f"{total:,} points in walls, obstacles and zones (the limit is {MAX_TOTAL_POINTS:,})",
+        )
 
 
 def _parse_active(data: dict, source: str) -> str:
@@ -439,15 +458,17 @@ def _parse_rotate(data: dict, source: str) -> float:
     raw = data.get("rotate_deg", 0)
     if raw is None:
         return 0.0
-    if isinstance(raw, bool) or not isinstance(raw, (int, float)) or not math.isfinite(raw):
+    if isinstance(raw, bool) or not isinstance(raw, (int, float)):
         _fail(source, "rotate_deg", f"not a finite number: {_show(raw)}")
-    return float(raw)
+    return _number(raw, source, "rotate_deg")
 
 
 def _parse_name(data: dict, source: str) -> str:
     name = data["name"]
     if isinstance(name, bool) or not isinstance(name, (str, int)) or not str(name).strip():
         _fail(source, "name", f"not a non-empty string: {_show(name)}")
+    if not str(name).strip().isprintable():
+        _fail(source, "name", f"control characters in the name: {_show(name)}")
     return str(name).strip()
 
 
@@ -475,6 +496,7 @@ def parse_arena(
         rotate_deg=_parse_rotate(data, source),
         source=source,
     )
+    _check_total_points(arena, source)
     if validate:
         validate_arena(arena, robot_radius)
     return arena
@@ -485,16 +507,17 @@ def validate_arena(arena: Arena, robot_radius: float = 10.0) -> None:
     """Check an arena's geometry; raise a one-line :class:`ArenaError` on the first problem."""
     src = arena.source
     _check_polygon(arena.walls, "walls", src)
+    boxes = [_bbox(poly) for poly in arena.obstacles]
     for k, poly in enumerate(arena.obstacles):
         _check_polygon(poly, f"obstacles[{k}]", src)
-        _check_obstacle_placement(arena, k, src)
-    _check_goals(arena, src)
-    _check_markers(arena, src)
+        _check_obstacle_placement(arena, k, src, boxes)
+    _check_goals(arena, src, boxes)
+    _check_markers(arena, src, boxes)
     _check_start(arena, robot_radius, src)
     for k, door in enumerate(arena.doors):
         _check_finite_point(door.a, f"doors[{k}].a", src)
         _check_finite_point(door.b, f"doors[{k}].b", src)
-        _check_free_point(arena, door.plate, f"doors[{k}].plate", src)
+        _check_free_point(arena, door.plate, f"doors[{k}].plate", src, boxes)
     if not math.isfinite(arena.rotate_deg):
         _fail(src, "rotate_deg", f"not a finite number: {_show(arena.rotate_deg)}")
 
@@ -516,7 +539,10 @@ def _check_polygon(poly: tuple[Point, ...], item: str, src: str) -> None:
             kind = " (zero-length edge)" if i == j + 1 else ""
             _fail(src, f"{item}[{i}]", f"repeated point {_fmt_point(p)}, same as {item}[{j}]{kind}")
         seen[p] = i
-    bad = geometry.polygon_self_intersection(poly)
+    try:
+        bad = geometry.polygon_self_intersection(poly)
+    except geometry.TooComplex as exc:
+        _fail(src, item, f"too complex to check: {exc}")
     if bad is not None:
         i, j = bad
         n = len(poly)
@@ -530,27 +556,60 @@ def _check_polygon(poly: tuple[Point, ...], item: str, src: str) -> None:
         _fail(src, item, "zero-area polygon (all points on one line)")
 
 
-def _check_obstacle_placement(arena: Arena, k: int, src: str) -> None:
+Box = tuple[float, float, float, float]
+
+
+def _bbox(poly: tuple[Point, ...]) -> Box:
+    """``(xmin, ymin, xmax, ymax)`` grown by EPS (empty polygons give an empty box)."""
+    if not poly:
+        return (math.inf, math.inf, -math.inf, -math.inf)
+    xs = [p[0] for p in poly]
+    ys = [p[1] for p in poly]
+    e = geometry.EPS
+    return (min(xs) - e, min(ys) - e, max(xs) + e, max(ys) + e)
+
+
+def _boxes_meet(a: Box, b: Box) -> bool:
+    return a[0] <= b[2] and b[0] <= a[2] and a[1] <= b[3] and b[1] <= a[3]
+
+
+def _in_box(p: Point, box: Box) -> bool:
+    return box[0] <= p[0] <= box[2] and box[1] <= p[1] <= box[3]
+
+
+def _intersect(p: tuple[Point, ...], q: tuple[Point, ...], src: str, item: str):
+    try:
+        return geometry.polygons_intersect(p, q)
+    except geometry.TooComplex as exc:
+        _fail(src, item, f"too complex to check: {exc}")
+
+
+def _check_obstacle_placement(arena: Arena, k: int, src: str, boxes: list[Box]) -> None:
     """Obstacle ``k`` lies strictly inside the walls and apart from earlier obstacles."""
     poly = arena.obstacles[k]
     item = f"obstacles[{k}]"
-    for i, p in enumerate(poly):
+    hit = _intersect(poly, arena.walls, src, item)
+    # With no edge meeting the walls, the obstacle is wholly inside or wholly outside, so
+    # one point decides (and it is the first outside point when all are outside).
+    points = range(len(poly)) if hit is not None else range(1)
+    for i in points:
+        p = poly[i]
         if not geometry.point_in_polygon(p, arena.walls):
             _fail(src, f"{item}[{i}]", f"point {_fmt_point(p)} is outside the walls (or on them)")
-    hit = geometry.polygons_intersect(poly, arena.walls)
     if hit is not None:
         _fail(
             src, item, f"crosses or touches the walls (edge {item}[{hit[0]}] meets walls[{hit[1]}])"
         )
     for m in range(k):
-        _check_obstacle_pair(arena.obstacles[m], poly, m, k, src)
+        if _boxes_meet(boxes[m], boxes[k]):
+            _check_obstacle_pair(arena.obstacles[m], poly, m, k, src)
 
 
 def _check_obstacle_pair(
     earlier: tuple[Point, ...], later: tuple[Point, ...], m: int, k: int, src: str
 ) -> None:
     item = f"obstacles[{k}]"
-    if geometry.polygons_intersect(later, earlier) is not None:
+    if _intersect(later, earlier, src, item) is not None:
         _fail(src, item, f"crosses or touches obstacles[{m}]")
     if geometry.point_in_polygon(later[0], earlier):
         _fail(src, item, f"lies inside obstacles[{m}]")
@@ -558,17 +617,24 @@ def _check_obstacle_pair(
         _fail(src, item, f"contains obstacles[{m}]")
 
 
-def _check_free_point(arena: Arena, p: Point, item: str, src: str) -> None:
-    """``p`` strictly inside the walls and not inside (or on) any obstacle."""
+def _check_free_point(
+    arena: Arena, p: Point, item: str, src: str, boxes: list[Box] | None = None
+) -> None:
+    """``p`` strictly inside the walls and not inside (or on) any obstacle (``boxes``: the
+    obstacles' :func:`_bbox`, computed when not given)."""
     _check_finite_point(p, item, src)
     if not geometry.point_in_polygon(p, arena.walls):
         _fail(src, item, f"point {_fmt_point(p)} is outside the walls (or on them)")
+    if boxes is None:
+        boxes = [_bbox(poly) for poly in arena.obstacles]
     for k, poly in enumerate(arena.obstacles):
+        if not _in_box(p, boxes[k]):
+            continue
         if geometry.locate_point(p, poly) != geometry.OUTSIDE:
             _fail(src, item, f"point {_fmt_point(p)} is inside obstacles[{k}]")
 
 
-def _check_goals(arena: Arena, src: str) -> None:
+def _check_goals(arena: Arena, src: str, boxes: list[Box]) -> None:
     if not arena.goals:
         _fail(src, "goals", "empty list: at least one goal is needed")
     seen: dict[str, int] = {}
@@ -582,7 +648,7 @@ def _check_goals(arena: Arena, src: str) -> None:
                 f"duplicate goal name {goal.name!r}, same as goals[{seen[goal.name]}]",
             )
         seen[goal.name] = i
-        _check_free_point(arena, goal.at, f"goals[{i}].at", src)
+        _check_free_point(arena, goal.at, f"goals[{i}].at", src, boxes)
     if arena.active_goal not in seen:
         _fail(
             src,
@@ -592,12 +658,11 @@ def _check_goals(arena: Arena, src: str) -> None:
         )
 
 
-def _check_markers(arena: Arena, src: str) -> None:
-    if not arena.end_of_world:
-        _fail(src, "end_of_world", "empty list: at least one end-of-world marker is needed")
+def _check_markers(arena: Arena, src: str, boxes: list[Box]) -> None:
+    """Any number of markers (the paper's "any number"; none: a closed arena)."""
     for i, marker in enumerate(arena.end_of_world):
         item = f"end_of_world[{i}]"
-        _check_free_point(arena, marker.at, f"{item}.at", src)
+        _check_free_point(arena, marker.at, f"{item}.at", src, boxes)
         if marker.zone is None:
             continue
         _check_polygon(marker.zone, f"{item}.zone", src)

@@ -1,9 +1,14 @@
 """``koolio-pm``: the command line.
 
 Every command prints a one-line ``koolio-pm: error: ...`` and exits with status 2 on bad
-input (a malformed arena, a corrupt or mismatched Q-table, a wrong flag), never a
-traceback. Commands that need drawing (``view``, ``plot``) import pygame / matplotlib
-only when they run.
+input (a malformed arena, a corrupt or mismatched Q-table, a wrong flag, a file that
+cannot be read or written), never a traceback, and leaves existing files as they were.
+Commands that need drawing (``view``, ``plot``) import pygame / matplotlib only when they
+run.
+
+Files: the Q-table and the log default to ``runs/<arena>.qtable`` and ``runs/<arena>.csv``
+(``<arena>``: the built-in name, or the arena file's stem), so runs in different arenas
+never share them.
 """
 
 from __future__ import annotations
@@ -14,20 +19,47 @@ import json
 import os
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 from typing import NoReturn
 
-from .errors import KoolioError
+from .errors import KoolioError, located
 
 DEFAULT_QTABLE = "runs/hallway.qtable"
-DEFAULT_LOG = "runs/train.csv"
+DEFAULT_LOG = "runs/hallway.csv"
 DEFAULT_EPISODES = 1500
+#: Most robots of ``train --robots`` (each is a copy of the arena in one pymunk space).
+MAX_ROBOTS = 1024
+
+
+def default_files(arena: str) -> tuple[str, str]:
+    """The default Q-table and log of runs in ``arena`` (a built-in name or a file).
+
+    >>> default_files("room"), default_files("arenas/lab.yaml")
+    (('runs/room.qtable', 'runs/room.csv'), ('runs/lab.qtable', 'runs/lab.csv'))
+    """
+    stem = Path(arena).stem or "arena"
+    return f"runs/{stem}.qtable", f"runs/{stem}.csv"
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse with one-line errors (no usage block) and exit status 2."""
+    """argparse with one-line errors (no usage block), ``koolio-pm: error: ...`` like every
+    other error, and exit status 2."""
 
     def error(self, message: str) -> NoReturn:
-        self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
+        sub = self.prog.removeprefix("koolio-pm").strip()
+        where = f" (see koolio-pm {sub} --help)" if sub else " (see koolio-pm --help)"
+        self.exit(2, f"koolio-pm: error: {' '.join(message.split())}{where}\n")
+
+
+def seed_type(text: str) -> int:
+    """``--seed``: an integer >= 0 (numpy seeds are non-negative)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text[:40]!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be >= 0, got {value}")
+    return value
 
 
 def add_env_args(p: argparse.ArgumentParser) -> None:
@@ -45,7 +77,7 @@ def add_env_args(p: argparse.ArgumentParser) -> None:
         default=None,
         help="goal name (default: the arena's active goal); 'random': a random goal per episode",
     )
-    p.add_argument("--seed", type=int, default=0, help="run seed (default 0)")
+    p.add_argument("--seed", type=seed_type, default=0, help="run seed, >= 0 (default 0)")
 
 
 def add_world_arg(p: argparse.ArgumentParser) -> None:
@@ -59,15 +91,33 @@ def add_world_arg(p: argparse.ArgumentParser) -> None:
 
 
 def add_learning_files_args(p: argparse.ArgumentParser) -> None:
-    """``--qtable`` and ``--log``, shared by ``train`` and ``view``."""
+    """``--qtable`` and ``--log``, shared by ``train`` and ``view`` (:func:`resolve_files`)."""
     p.add_argument(
         "--qtable",
-        default=DEFAULT_QTABLE,
-        help=f"Q-table file, resumed if present; backup beside it (default {DEFAULT_QTABLE})",
+        default=None,
+        help="Q-table file, resumed if present; backup beside it (default runs/<arena>.qtable)",
     )
     p.add_argument(
-        "--log", default=DEFAULT_LOG, help=f"per-episode CSV log (default {DEFAULT_LOG})"
+        "--log",
+        default=None,
+        help="per-episode CSV log (default runs/<arena>.csv; '' for none)",
     )
+
+
+def resolve_files(args: argparse.Namespace) -> None:
+    """Fill in the default ``--qtable`` / ``--log`` of the arena, refuse empty names."""
+    from .files import check_path
+
+    check_path(args.arena, "--arena")
+    table, log = default_files(args.arena)
+    if getattr(args, "qtable", "") is None:
+        args.qtable = table
+    if getattr(args, "log", "") is None:
+        args.log = log
+    for flag in ("qtable", "init_qtable", "config", "world"):  # --log '': no log
+        value = getattr(args, flag, None)
+        if value is not None:
+            check_path(value, "--" + flag.replace("_", "-"))
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -109,8 +159,9 @@ def build_parser() -> argparse.ArgumentParser:
     add_env_args(p)
     p.add_argument(
         "--qtable",
-        default=DEFAULT_QTABLE,
-        help="Q-table file (.qtable, or a policy exported for the robot)",
+        default=None,
+        help="Q-table file (.qtable, or a policy exported for the robot; default "
+        "runs/<arena>.qtable)",
     )
     p.add_argument("--episodes", type=int, default=100, help="episodes (default 100)")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
@@ -143,19 +194,37 @@ EXTRA_COMMANDS: dict[str, str] = {
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
+        if hasattr(args, "arena"):
+            resolve_files(args)
         if args.command in EXTRA_COMMANDS:
             return int(importlib.import_module(EXTRA_COMMANDS[args.command]).run(args) or 0)
         return int(COMMANDS[args.command](args) or 0)
     except KoolioError as exc:
-        print(f"koolio-pm: error: {exc}", file=sys.stderr)
+        print(f"koolio-pm: error: {one_line(str(exc))}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("koolio-pm: interrupted", file=sys.stderr)
-        return 130
     except BrokenPipeError:  # e.g. `koolio-pm info | head -1`: the reader left, not an error
         # Python's documented recipe: point stdout at devnull so the exit flush is quiet.
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
+    except OSError as exc:  # a file error no command turned into a KoolioError itself
+        from .files import os_problem
+
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"koolio-pm: error: {where}{one_line(os_problem(exc))}", file=sys.stderr)
+        return 2
+    except (RecursionError, MemoryError) as exc:
+        what = "nested too deeply" if isinstance(exc, RecursionError) else "out of memory"
+        print(f"koolio-pm: error: {args.command}: input too large ({what})", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("koolio-pm: interrupted", file=sys.stderr)
+        return 130
+
+
+def one_line(text: str, limit: int = 2000) -> str:
+    """``text`` on one line, at most ``limit`` characters (an error message)."""
+    text = " ".join(text.split())
+    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 # --- commands ---------------------------------------------------------------------------
@@ -164,7 +233,19 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _make_env(args: argparse.Namespace):
     from .env import KoolioEnv
 
-    return KoolioEnv(arena=args.arena, config=args.config, goal=args.goal, world=args.world)
+    env = KoolioEnv(arena=args.arena, config=args.config, goal=args.goal, world=args.world)
+    warn_endless(env.config)
+    return env
+
+
+def warn_endless(cfg) -> None:
+    """A warning when episodes may never end (no step cap)."""
+    if cfg.episode.max_steps == 0:
+        print(
+            "warning: episode.max_steps is 0 (no step cap): an episode ends only at the goal "
+            "or off the end of the world, and a policy that never gets there runs for ever",
+            file=sys.stderr,
+        )
 
 
 def _positive(value: int, flag: str) -> None:
@@ -177,8 +258,8 @@ def cmd_train(args: argparse.Namespace) -> int:
     from .training import train
 
     _positive(args.episodes, "--episodes")
-    if args.robots < 1:
-        raise KoolioError(f"--robots: must be >= 1, got {args.robots}")
+    if not 1 <= args.robots <= MAX_ROBOTS:
+        raise KoolioError(f"--robots: must be in 1..{MAX_ROBOTS}, got {args.robots}")
     env = _make_env(args)
     say = (lambda s: None) if args.quiet else print
     say("koolio-pm train")
@@ -200,9 +281,9 @@ def cmd_train(args: argparse.Namespace) -> int:
     say("configuration:")
     for line in env.config.to_yaml().splitlines():
         say("  " + line)
-    store = QTableStore(args.qtable)
+    store = QTableStore(args.qtable, purpose="koolio-pm train")
     if args.init_qtable:
-        _seed_table(args.init_qtable, args.qtable, env, say)
+        _seed_table(args.init_qtable, store, args.log, env, say)
     report = None if args.quiet else print
     if args.robots > 1:
         from .multi import train_many
@@ -237,23 +318,37 @@ def cmd_train(args: argparse.Namespace) -> int:
     return 130 if result.interrupted else 0
 
 
-def _seed_table(init_path: str, qtable_path: str, env, say) -> None:
-    """``--init-qtable``: start a new table file from another table (either format)."""
-    from pathlib import Path
-
+def _seed_table(init_path: str, store, log: str, env, say) -> None:
+    """``--init-qtable``: start a new table file from another table (either format). The
+    new table's log must be new too (its episodes continue the other table's count)."""
+    from .arena import arena_record
+    from .episode_log import check_log_path, log_rows
     from .export import load_any_table
-    from .qtable import QTableStore, check_compatible
+    from .qtable import check_compatible
     from .training import sensor_signature
 
-    if Path(qtable_path).exists():
+    store.lock()
+    if store.path.exists() or store.backup.exists():
+        store.close()
         raise KoolioError(
-            f"--init-qtable: {qtable_path} already exists; it would be resumed "
+            f"--init-qtable: {store.path} already exists; it would be resumed "
             "instead (choose a new --qtable)"
         )
-    table = load_any_table(init_path)
-    check_compatible(table, env.layout, sensor_signature(env.config), init_path)
-    store = QTableStore(qtable_path)
-    store.save(table)
+    try:
+        if log:
+            check_log_path(log, store.path)
+        if log and log_rows(log):
+            raise KoolioError(
+                located(log, "", "holds rows of another run: give --init-qtable a new --log")
+            )
+        table = load_any_table(init_path)
+        check_compatible(
+            table, env.layout, sensor_signature(env.config), init_path, arena_record(env.arena)
+        )
+        store.create(table)
+    except BaseException:
+        store.close()
+        raise
     say(
         f"  starting from {init_path}: {len(table)} states, "
         f"{table.meta.get('episodes', 0)} episodes"
@@ -261,6 +356,7 @@ def _seed_table(init_path: str, qtable_path: str, env, say) -> None:
 
 
 def cmd_eval(args: argparse.Namespace) -> int:
+    from .arena import arena_record
     from .export import load_any_table
     from .qtable import check_compatible
     from .training import evaluate, sensor_signature
@@ -271,7 +367,9 @@ def cmd_eval(args: argparse.Namespace) -> int:
         args.goal = None
     env = _make_env(args)
     table = load_any_table(args.qtable)
-    check_compatible(table, env.layout, sensor_signature(env.config), args.qtable)
+    check_compatible(
+        table, env.layout, sensor_signature(env.config), args.qtable, arena_record(env.arena)
+    )
     goals = env.arena.goal_names() if goal_all else [None]
     results = [evaluate(env, table, args.episodes, args.seed, goal=g) for g in goals]
     if args.json:

@@ -11,8 +11,11 @@ A YAML configuration file holds any subset of the sections below, for example::
     rewards: {goal: 100, bump: -5}
     learner: {alpha: 0.2, epsilon: {start: 0.3, end: 0.02, decay_episodes: 500}}
 
-Unknown sections or keys, wrong types and out-of-range values are refused with a
-one-line :class:`~koolio_pymunk.errors.ConfigError`.
+Unknown sections or keys, a key given twice, wrong types and out-of-range values are
+refused with a one-line :class:`~koolio_pymunk.errors.ConfigError`, and so is a sensor
+layout whose keyword would not fit 64 bits (at load, not at the first save). Numbers are
+read as YAML 1.2 reads them (``1e-9`` is a number). Values that would make a run
+endless or huge have upper bounds (:data:`LIMITS`).
 
 **Profiles.** A configuration may be named instead of given as a file: ``--config paper``
 reads the profile shipped in ``koolio_pymunk/profiles/paper.yaml`` (:func:`profile_names`
@@ -41,6 +44,7 @@ import yaml
 
 from .errors import ConfigError, located
 from .realism import RealismConfig, validate_realism
+from .yamlfile import read_yaml
 
 #: Robot profiles (paper §3): radius in inches.
 ROBOT_PROFILES: dict[str, float] = {
@@ -286,20 +290,15 @@ def config_path(name: str | Path) -> Path:
     )
 
 
+#: Largest configuration or world file read.
+MAX_CONFIG_BYTES = 256 * 1024
+
+
 def read_config_file(path: str | Path) -> tuple[dict, str]:
     """The mapping in a configuration file or profile, and the name to report it by."""
     file = config_path(path)
     source = str(path)
-    try:
-        text = file.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ConfigError(located(source, "", f"cannot read: {exc.strerror}")) from None
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"line {mark.line + 1}" if mark else ""
-        raise ConfigError(located(source, where, "not valid YAML")) from None
+    data = read_yaml(file, source, ConfigError, MAX_CONFIG_BYTES, "configuration file")
     return ({} if data is None else data), source
 
 
@@ -397,21 +396,42 @@ def _coerce(value: Any, hint: Any, source: str, item: str) -> Any:
         return value
     if hint in (int, float):
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ConfigError(located(source, item, f"expected a number, got {value!r}"))
-        if hint is int and not float(value).is_integer():
-            raise ConfigError(located(source, item, f"expected an integer, got {value!r}"))
-        if not math.isfinite(value):
-            raise ConfigError(located(source, item, f"must be finite, got {value!r}"))
-        return hint(value)
+            raise ConfigError(located(source, item, f"expected a number, got {_show(value)}"))
+        try:
+            number = float(value)
+        except OverflowError:  # an integer beyond the float range
+            number = math.inf
+        if not math.isfinite(number) or abs(number) > MAX_NUMBER:
+            raise ConfigError(
+                located(source, item, f"must be finite and at most 1e15, got {_show(value)}")
+            )
+        if hint is int and not number.is_integer():
+            raise ConfigError(located(source, item, f"expected an integer, got {_show(value)}"))
+        return int(value) if hint is int else number
     if hint is str:
         if not isinstance(value, str):
-            raise ConfigError(located(source, item, f"expected a string, got {value!r}"))
+            raise ConfigError(located(source, item, f"expected a string, got {_show(value)}"))
         return value
     if origin is list:
         if not isinstance(value, list):
-            raise ConfigError(located(source, item, f"expected a list, got {value!r}"))
+            raise ConfigError(located(source, item, f"expected a list, got {_show(value)}"))
+        if len(value) > MAX_LIST:
+            raise ConfigError(
+                located(source, item, f"{len(value):,} entries (the limit is {MAX_LIST})")
+            )
         return [_coerce(v, args[0], source, f"{item}[{i}]") for i, v in enumerate(value)]
     return value
+
+
+#: Largest magnitude of a number in a configuration (beyond it, floats lose integers).
+MAX_NUMBER = 1e15
+#: Most entries of a list in a configuration (sensor angles, groups, thresholds).
+MAX_LIST = 64
+
+
+def _show(value: Any, limit: int = 40) -> str:
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 # --- validation -----------------------------------------------------------------------
@@ -519,6 +539,40 @@ def _validate(cfg: Config, src: str) -> None:
         )
     _check(le.epsilon.decay_episodes >= 0, src, "learner.epsilon.decay_episodes", "must be >= 0")
     validate_realism(cfg.realism, src)
+    _check_limits(cfg, src)
+    _check_keyword_bits(cfg, src)
+
+
+#: Upper bounds of values that would otherwise make a run endless or huge:
+#: item -> (largest value, why).
+LIMITS: dict[str, tuple[float, str]] = {
+    "rescue.rescue_max_backup": (100, "each backup is a move; 100 is 100 moves per rescue"),
+    "sensors.sonar.sub_arcs": (360, "one ray per sub-arc and sonar at every step"),
+    "episode.clockless_loop_count": (1_000_000, "steps per timer tick of the window"),
+}
+
+
+def _check_limits(cfg: Config, src: str) -> None:
+    for item, (most, why) in LIMITS.items():
+        value = cfg
+        for part in item.split("."):
+            value = getattr(value, part)
+        _check(value <= most, src, item, f"must be <= {most:g} ({why}), got {value:g}")
+
+
+def _check_keyword_bits(cfg: Config, src: str) -> None:
+    """The sensors' state fields and the action must fit a 64-bit keyword (Table 12)."""
+    from .qtable import MAX_KEYWORD_BITS, N_ACTIONS, KeywordLayout
+    from .sensors import state_fields
+
+    layout = KeywordLayout(tuple(state_fields(cfg.sensors)), N_ACTIONS)
+    _check(
+        layout.total_bits <= MAX_KEYWORD_BITS,
+        src,
+        "sensors",
+        f"the keyword would need {layout.total_bits} bits ({len(layout.fields)} state fields); "
+        f"it must fit {MAX_KEYWORD_BITS}: use fewer cameras, sonar groups or thresholds",
+    )
 
 
 def _increasing(xs: list[float]) -> bool:

@@ -29,6 +29,17 @@ class QTableError(KoolioError):
     """A corrupt, truncated or mismatched Q-table file."""
 
 
+class FileError(KoolioError):
+    """A file that cannot be read or written (disk full, permissions, a folder in the way,
+    too large ...). ``errno`` is the operating system's error number, when there is one."""
+
+    errno: int | None = None
+
+
+class InUseError(KoolioError):
+    """A file another process is writing (its lock is held)."""
+
+
 def located(source: str, item: str, problem: str) -> str:
     """Format the one-line message ``source: item: problem`` (item may be empty)."""
     return f"{source}: {item}: {problem}" if item else f"{source}: {problem}"

@@ -24,7 +24,9 @@ from typing import Any
 from . import robot_runtime as rt
 from .config import Config, load_config
 from .errors import QTableError, located
-from .qtable import MAGIC, KeywordLayout, QTable, atomic_write, load_qtable
+from .files import atomic_write, check_path, os_problem
+from .locks import FileLock
+from .qtable import MAGIC, KeywordLayout, QTable, load_qtable
 
 WRITTEN_BY = "koolio-pm export"
 
@@ -62,10 +64,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     table = load_any_table(args.qtable)
-    out = Path(args.out)
-    if out.suffix == ".qtable":
-        out.parent.mkdir(parents=True, exist_ok=True)
-        atomic_write(out, table.to_bytes())
+    out = check_path(args.out, "--out")
+    if out.suffix == ".qtable":  # a table: not while a run writes it
+        with FileLock(out, "koolio-pm export"):
+            atomic_write(out, table.to_bytes())
         print(f"wrote {out}: {len(table)} states, {table.meta.get('episodes', 0)} episodes")
         return 0
     cfg = load_config(args.config, world=args.world)
@@ -93,6 +95,7 @@ def policy_document(
     sensors = table.meta.get("sensors")
     if not isinstance(sensors, dict) or not sensors:
         raise QTableError(located(source, "sensors", "the table names no sensor layout"))
+    check_sensor_signature(sensors, source)
     cfg = cfg or Config()
     n_camera = len(sensors["camera_sensors_deg"])
     episodes = int(table.meta.get("episodes", 0))
@@ -129,6 +132,8 @@ def policy_document(
         "q_init": float(table.q_init),
         "episodes": episodes,
     }
+    if isinstance(table.meta.get("arena"), dict):  # where it was learned (kept by the robot)
+        doc["arena"] = table.meta["arena"]
     doc.update(rt.rows_json(table.rows, lay.action_bits))
     try:
         rt.validate_document(doc, source)
@@ -137,10 +142,40 @@ def policy_document(
     return doc
 
 
+#: What a policy needs of a table's sensor signature (``training.sensor_signature``).
+_SIGNATURE_LISTS = (
+    "sonar_sensors_deg",
+    "camera_sensors_deg",
+    "sonar_thresholds",
+    "camera_thresholds",
+)
+
+
+def check_sensor_signature(sensors: dict[str, Any], source: str) -> None:
+    """The items of a sensor signature a policy is built from, with their types."""
+
+    def bad(key: str, what: str) -> QTableError:
+        return QTableError(located(source, f"sensors.{key}", f"must be {what}"))
+
+    for key in _SIGNATURE_LISTS:
+        value = sensors.get(key)
+        if not isinstance(value, list) or not all(rt.is_number(v) for v in value):
+            raise bad(key, "a list of numbers")
+    groups = sensors.get("sonar_groups")
+    if not isinstance(groups, list) or not all(
+        isinstance(g, list) and all(isinstance(i, int) and not isinstance(i, bool) for i in g)
+        for g in groups
+    ):
+        raise bad("sonar_groups", "a list of lists of sonar indices")
+    if not rt.is_number(sensors.get("max_camera_view")):
+        raise bad("max_camera_view", "a number")
+    if not isinstance(sensors.get("compass_in_state"), bool):
+        raise bad("compass_in_state", "true or false")
+
+
 def write_policy(doc: dict[str, Any], out: Path) -> None:
-    """Write a policy document atomically."""
-    if not out.parent.exists():
-        out.parent.mkdir(parents=True, exist_ok=True)
+    """Write a policy document atomically (:class:`~koolio_pymunk.errors.FileError` if it
+    cannot be written)."""
     atomic_write(out, rt.dump_document(doc).encode("utf-8"))
 
 
@@ -157,7 +192,10 @@ def table_from_policy(policy: rt.Policy) -> QTable:
     layout = KeywordLayout(tuple(zip(lay.names, lay.levels)), lay.n_actions)
     if layout.bits != lay.bits or layout.shifts != lay.shifts:  # pragma: no cover
         raise QTableError(f"{policy.source}: layout: keyword bits differ from the simulator's")
-    meta = {"sensors": policy.sensors, "episodes": policy.episodes}
+    meta: dict[str, Any] = {"sensors": policy.sensors, "episodes": policy.episodes}
+    arena = policy.extra.get("arena")
+    if isinstance(arena, dict) and all(isinstance(arena.get(k), str) for k in ("name", "sha256")):
+        meta["arena"] = {"name": arena["name"], "sha256": arena["sha256"]}
     rows = {k: list(v) for k, v in policy.rows.items()}
     return QTable(layout, meta, policy.q_init, rows)
 
@@ -167,12 +205,12 @@ def load_any_table(path: str | Path) -> QTable:
 
     The caller checks the layout and sensors with :func:`qtable.check_compatible`.
     """
-    p = Path(path)
+    p = check_path(path, "--qtable")
     try:
         with open(p, "rb") as fh:
             head = fh.read(64)
     except OSError as exc:
-        raise QTableError(located(str(p), "", f"cannot read: {exc.strerror}")) from None
+        raise QTableError(located(str(p), "", f"cannot read: {os_problem(exc)}")) from None
     if head[: len(MAGIC)] == MAGIC:
         return load_qtable(p)
     if head.lstrip()[:1] != b"{":

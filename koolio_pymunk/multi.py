@@ -41,9 +41,18 @@ without a new episode to start stand still.
 time ``save_every`` more episodes have finished (default ``N``: about once per round of
 episodes rather than at every episode end, because N robots finish episodes N times as
 often and every save is two fsynced file writes), and always at the end and on Ctrl-C.
-``save_every=1`` is the paper's cadence. Ctrl-C folds every unfinished episode into the
-table (logged ``interrupted``); with ``discard_unfinished`` the table file is left as last
-saved.
+``save_every=1`` is the paper's cadence. Each finished episode's row is logged when it
+finishes, so after a SIGKILL the log may be ahead of the table by up to ``save_every - 1``
+rows: resuming removes them (:mod:`koolio_pymunk.episode_log`).
+
+**Ctrl-C** (taken between ticks) folds every unfinished episode into the table and logs
+it ``interrupted``, numbered ``first + finished``, ``+ 1``, ... in robot order (the numbers
+those episodes get when training resumes). With ``discard_unfinished`` only the unfinished
+episodes are discarded: every finished episode stays in the table and the log. The robots
+share one table, so an unfinished episode's writes are interleaved with those of
+episodes that finished; each robot journals its own writes (:func:`qkernel.undo_writes`),
+and the discard takes back, newest first, every write of an unfinished episode that no
+other robot has written over since (and drops the rows only they created), then saves.
 """
 
 from __future__ import annotations
@@ -66,21 +75,23 @@ from .qkernel import (
     SharedTable,
     choose,
     learn,
-    update,
+    new_journal,
+    undo_writes,
+    update_logged,
     zone_arrays,
 )
-from .qtable import QTableStore, load_qtable
+from .qtable import QTableStore
 from .raycast import any_near_wall, new_trig, sense_batch, sense_one, wall_array
 from .readout import readout, readout_batch
 from .realism import realism_on
 from .rescue import rescue_robot
 from .training import (
     EpisodeResult,
-    LogWriter,
     Progress,
+    SafeInterrupt,
     TrainResult,
     episode_seeds,
-    sensor_signature,
+    open_run,
 )
 from .world import Action, World
 
@@ -252,9 +263,8 @@ def train_many(
     save_every: int | None = None,
 ) -> TrainResult:
     """Train ``robots`` robots for ``episodes`` more episodes into one table (module doc)."""
-    return _Run(env, store, episodes, seed, log_path, robots, save_every).run(
-        discard_unfinished, report, report_every
-    )
+    run = _Run(env, store, episodes, seed, log_path, robots, save_every, discard_unfinished)
+    return run.run(discard_unfinished, report, report_every)
 
 
 class _Run:
@@ -267,6 +277,7 @@ class _Run:
         log_path: str | Path | None,
         robots: int,
         save_every: int | None,
+        journal: bool = False,
     ) -> None:
         cfg = env.config
         if realism_on(cfg.realism):
@@ -275,7 +286,7 @@ class _Run:
                 "has no realism models) and this configuration turns realism on: use --robots 1"
             )
         self.env, self.cfg, self.store = env, cfg, store
-        self.table = store.open(env.layout, sensor_signature(cfg), cfg.learner.q_init)
+        self.table, self.log = open_run(env, store, log_path, "koolio-pm train")
         self.shared = SharedTable(self.table)
         self.first = int(self.table.meta.get("episodes", 0))
         self.budget = episodes
@@ -285,7 +296,6 @@ class _Run:
         self.world = World.from_arena(env.arena, cfg.robot.radius, robots)
         self.poses = PoseReader(self.world)
         self.fleet = Fleet(env, self.world)
-        self.log = LogWriter(log_path)
         self.progress = Progress()
         self.results: list[EpisodeResult] = []
         self.tick_rng = np.random.default_rng([seed, robots, 2])
@@ -313,6 +323,9 @@ class _Run:
         rescue = cfg.rescue
         self.rescue_after = rescue.max_steps_before_rescue if rescue.auto_rescue_toggle else -1
         self.zones = zone_arrays(env.zones)
+        cap = cfg.episode.max_steps
+        self.journal = new_journal(robots, (cap + 1 if cap > 0 else 1024) if journal else 0)
+        """Every robot's writes in its running episode (:func:`qkernel.update_logged`)."""
 
     # -- episodes ---------------------------------------------------------------------
     def _start(self, r: int) -> None:
@@ -342,6 +355,7 @@ class _Run:
         self.epsilon[r] = ep.epsilon
         self.steps[r] = self.bumps[r] = 0
         self.total[r] = 0.0
+        self.journal[2][r] = 0
         self.eps[r] = ep
 
     def _finish(self, r: int, outcome: str) -> None:
@@ -383,22 +397,27 @@ class _Run:
         interrupted = False
         last_report = time.perf_counter()
         try:
-            for r in range(self.n):
-                self._start(r)
-            while self.finished < self.budget:
-                self._tick()
-                now = time.perf_counter()
-                if report and now - last_report >= report_every:
-                    eps = [ep.epsilon for ep in self.eps if ep is not None]
-                    report(self._line(eps[0] if eps else 0.0))
-                    last_report = now
-            if report:
-                report(self._line(self.cfg.learner.epsilon.at(self.first + self.budget - 1)))
-        except KeyboardInterrupt:
-            interrupted = True
-            self._interrupt(discard_unfinished, report)
+            with SafeInterrupt() as guard:
+                try:
+                    for r in range(self.n):
+                        self._start(r)
+                    while self.finished < self.budget:
+                        guard.check()
+                        self._tick()
+                        now = time.perf_counter()
+                        if report and now - last_report >= report_every:
+                            eps = [ep.epsilon for ep in self.eps if ep is not None]
+                            report(self._line(eps[0] if eps else 0.0))
+                            last_report = now
+                    if report:
+                        last = self.first + self.budget - 1
+                        report(self._line(self.cfg.learner.epsilon.at(last)))
+                except KeyboardInterrupt:
+                    interrupted = True
+                    self._interrupt(discard_unfinished, report)
         finally:
             self.log.close()
+            self.store.close()
         self.shared.sync()
         p = self.progress
         return TrainResult(
@@ -416,32 +435,48 @@ class _Run:
         return self.progress.line(done, self.first + self.budget, epsilon) + f"  robots {self.n}"
 
     def _interrupt(self, discard: bool, report: Callable[[str], None] | None) -> None:
+        running = [r for r, ep in enumerate(self.eps) if ep is not None]
         if discard:
-            self.table = load_qtable(self.store.path)
-            self.shared = SharedTable(self.table)
+            self._discard(running)
             if report:
-                report("interrupted: unfinished episodes discarded (Exit Without Save)")
-            return
-        for r, ep in enumerate(self.eps):
-            if ep is not None:
-                res = EpisodeResult(
-                    self.first + self.finished,
-                    float(self.total[r]),
-                    int(self.steps[r]),
-                    int(self.bumps[r]),
-                    "interrupted",
-                    ep.rescued,
-                    ep.epsilon,
-                    ep.goal,
+                report(
+                    f"interrupted: {len(running)} unfinished episodes discarded, "
+                    f"{self.finished} finished ones kept (Exit Without Save)"
                 )
-                self.log.write(res)
-                self.results.append(res)
+            return
+        for k, r in enumerate(running):
+            ep = self.eps[r]
+            assert ep is not None
+            res = EpisodeResult(
+                self.first + self.finished + k,
+                float(self.total[r]),
+                int(self.steps[r]),
+                int(self.bumps[r]),
+                "interrupted",
+                ep.rescued,
+                ep.epsilon,
+                ep.goal,
+            )
+            self.log.write(res)
+            self.results.append(res)
         self._save()
         if report:
             report("interrupted: unfinished episodes folded into the Q-table and saved (Exit)")
 
+    def _discard(self, running: list[int]) -> None:
+        """Exit Without Save: take back the unfinished episodes' writes, save the rest."""
+        jn = self.journal[2]
+        if any(int(jn[r]) > self.journal[0].shape[1] for r in running):  # pragma: no cover
+            raise AssertionError("journal overflow")  # _tick grows it before it can happen
+        dropped = undo_writes(self.shared, self.journal, running)
+        self.shared.sync()
+        for key in dropped:
+            self.table.rows.pop(key, None)
+        self.store.save(self.table)
+
     def _tick(self) -> None:
         n, rng, sh = self.n, self.tick_rng, self.shared
+        self._grow_journal()
         explore = rng.random(n)
         random_action = rng.integers(self.table.layout.n_actions, size=n)
         tie = rng.random(n)
@@ -460,7 +495,7 @@ class _Run:
                 r, self.active, self.actions, self.state, keys, flags[:, 0], flags[:, 1], xy,
                 self.reward, lc.alpha, lc.gamma, self.zones, self.rescue_after,
                 self.cfg.episode.max_steps, self.steps, self.bumps, self.total, self.event,
-                *sh.args(),
+                *self.journal, *sh.args(),
             )  # fmt: skip
             if why == RESCUE_DRAW:
                 self._rescue_step(r, int(keys[r]))
@@ -469,6 +504,17 @@ class _Run:
             elif why == TRUNCATED:
                 self._finish(r, "truncated")
             r += 1
+
+    def _grow_journal(self) -> None:
+        """Room for one more entry per robot (one update per robot per tick)."""
+        jint, jf, jn, seq = self.journal
+        cap = jint.shape[1]
+        if cap == 0 or int(jn.max()) < cap:
+            return
+        grown = new_journal(self.n, 2 * cap)
+        grown[0][:, :cap] = jint
+        grown[1][:, :cap] = jf
+        self.journal = (grown[0], grown[1], jn, seq)
 
     def _near_wall(self, movers: list[int], reach: float) -> bool:
         """World.act's sub-step choice from the known positions (``self.xy``)."""
@@ -482,8 +528,9 @@ class _Run:
         assert ep is not None
         lc = self.cfg.learner
         code = int(self.event[r])
-        update(*self.shared.args(), lc.alpha, lc.gamma, int(self.state[r]),
-               int(self.actions[r]), float(self.reward[code]), nxt, False)  # fmt: skip
+        update_logged(*self.shared.args(), lc.alpha, lc.gamma, int(self.state[r]),
+                      int(self.actions[r]), float(self.reward[code]), nxt, False, r,
+                      *self.journal)  # fmt: skip
         if ep.rng.random() < self.cfg.rescue.rescue_chance:
             rescue_robot(self.world, r, self.cfg.rescue, self.env._distance, ep.rng)
             self.xy[r] = self.world.pose(r)[:2]

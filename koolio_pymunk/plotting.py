@@ -1,6 +1,6 @@
 """Plot the learning curve of a training log (return, outcomes, steps per episode).
 
-``koolio-pm plot --log runs/train.csv --out curve.png`` reads the per-episode CSV that
+``koolio-pm plot --log runs/hallway.csv --out curve.png`` reads the per-episode CSV that
 ``koolio-pm train`` and ``koolio-pm view`` append to (see :mod:`koolio_pymunk.training`)
 and draws, against the episode number:
 
@@ -24,13 +24,15 @@ from __future__ import annotations
 import argparse
 import csv
 import io
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from .episode_log import MAX_LOG_BYTES
 from .errors import KoolioError, located
-from .files import atomic_write
+from .files import atomic_write, read_text
 
 REQUIRED = ("episode", "reward", "steps", "outcome")
 OUTCOMES = (
@@ -66,23 +68,20 @@ def _field(row: dict, name: str, kind, source: str, line: int):
             raise KoolioError(located(source, f"line {line}", f"{name}: missing"))
         return kind(0)
     try:
-        return kind(value)
+        number = kind(value)
     except ValueError:
-        raise KoolioError(
-            located(source, f"line {line}", f"{name}: not a number: {value!r}")
-        ) from None
+        number = None
+    if number is None or abs(number) > 2**53 or not math.isfinite(number):
+        shown = value if len(value) <= 30 else value[:27] + "..."
+        raise KoolioError(located(source, f"line {line}", f"{name}: not a number: {shown!r}"))
+    return number
 
 
 def read_log(path: str | Path) -> Log:
     """Read a training log; every problem is a one-line :class:`KoolioError`."""
     p = Path(path)
     source = str(p)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise KoolioError(located(source, "", "file not found")) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise KoolioError(located(source, "", f"cannot read: {exc}")) from None
+    text = read_text(p, MAX_LOG_BYTES, "training log")
     reader = csv.DictReader(io.StringIO(text))
     missing = [c for c in REQUIRED if c not in (reader.fieldnames or [])]
     if missing:
@@ -168,7 +167,6 @@ def plot_logs(logs: list[Log], out: str | Path, window: int = 50, title: str | N
     fig.savefig(buf, format="png", dpi=110)
     plt.close(fig)
     out = Path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
     atomic_write(out, buf.getvalue())
     return out
 
@@ -305,7 +303,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--log",
         action="append",
         default=None,
-        help="training log CSV (default runs/train.csv); repeat to compare runs",
+        help="training log CSV (default runs/hallway.csv); repeat to compare runs",
     )
     p.add_argument("--out", default="curve.png", help="PNG to write (default curve.png)")
     p.add_argument(
@@ -322,6 +320,8 @@ def run(args: argparse.Namespace) -> int:
         raise KoolioError(f"--window: must be >= 1, got {args.window}")
     if not str(args.out).lower().endswith(".png"):
         raise KoolioError(f"--out: {args.out}: must end in .png")
+    if Path(args.out).is_dir():
+        raise KoolioError(f"--out: {args.out}: is a folder, not a file")
     paths = [*args.logs, *(args.log or [])] or [DEFAULT_LOG]
     logs = [read_log(p) for p in paths]
     out = plot_logs(logs, args.out, args.window, args.title)

@@ -11,7 +11,10 @@ back into the ``QTable`` (before every save). The kernels:
   end of world > bump > action), episode counters and Table 11 update; it stops at a
   robot that needs Python (an auto-rescue draw, or the end of its episode) and returns
   its index, and is called again from the next robot;
-* :func:`update`: one Table 11 update (also used from Python after a rescue);
+* :func:`update`: one Table 11 update; :func:`update_logged` also records it in the
+  per-robot *journal* (row, action, order, value before and after), so that the writes of
+  episodes still running can be taken back (``--discard-unfinished`` with many robots:
+  :func:`undo_writes`);
 * :func:`in_zone`: ``env.EndZones.contains`` (discs, and polygons with the boundary
   outside), the same arithmetic.
 
@@ -131,6 +134,69 @@ def update(
     dirty[i] = True
 
 
+def new_journal(robots: int, capacity: int) -> tuple[np.ndarray, ...]:
+    """Empty journal arrays for :func:`update_logged` (``capacity`` 0: no journal):
+    ``jint[r, k]`` = row, action, order, created; ``jf[r, k]`` = before, after; ``jn[r]``
+    entries of robot ``r``; ``seq[0]`` the next order number."""
+    return (
+        np.zeros((robots, capacity, 4), np.int64),
+        np.zeros((robots, capacity, 2), np.float64),
+        np.zeros(robots, np.int64),
+        np.zeros(1, np.int64),
+    )
+
+
+@numba.njit(cache=True)
+def update_logged(
+    index, q, keys, dirty, count, q_init, alpha: float, gamma: float,
+    state: int, action: int, reward: float, nxt: int, terminal: bool,
+    r: int, jint: np.ndarray, jf: np.ndarray, jn: np.ndarray, seq: np.ndarray,
+) -> None:  # fmt: skip
+    """:func:`update`, recorded in robot ``r``'s journal when it has room (``jn[r]``
+    counts every update, so an overflow shows)."""
+    if jint.shape[1] == 0:
+        update(index, q, keys, dirty, count, q_init, alpha, gamma, state, action, reward, nxt,
+               terminal)  # fmt: skip
+        return
+    before = count[0]
+    i = _row(index, q, keys, dirty, count, q_init, state)
+    old = q[i, action]
+    update(index, q, keys, dirty, count, q_init, alpha, gamma, state, action, reward, nxt,
+           terminal)  # fmt: skip
+    k = jn[r]
+    if k < jint.shape[1]:
+        jint[r, k, 0] = i
+        jint[r, k, 1] = action
+        jint[r, k, 2] = seq[0]
+        jint[r, k, 3] = 1 if count[0] > before else 0
+        jf[r, k, 0] = old
+        jf[r, k, 1] = q[i, action]
+    jn[r] = k + 1
+    seq[0] += 1
+
+
+def undo_writes(shared: SharedTable, journal: tuple, robots: list[int]) -> list[int]:
+    """Take back the journaled writes of ``robots`` (their episodes are discarded), newest
+    first: an entry still holding the value the robot wrote gets its value from before;
+    one that another robot wrote over since keeps that robot's value. Returns the keys of
+    rows those robots created that are back at ``q_init`` in every action (the caller
+    drops them from the table: they were never visited by a kept episode)."""
+    jint, jf, jn, _ = journal
+    entries = sorted(
+        ((int(jint[r, k, 2]), r, k) for r in robots for k in range(int(jn[r]))), reverse=True
+    )
+    created = []
+    q = shared.q
+    for _, r, k in entries:
+        i, a = int(jint[r, k, 0]), int(jint[r, k, 1])
+        if q[i, a] == jf[r, k, 1]:
+            q[i, a] = jf[r, k, 0]
+            shared.dirty[i] = True
+        if jint[r, k, 3]:
+            created.append(i)
+    return [int(shared.keys[i]) for i in created if bool(np.all(q[i] == shared.q_init))]
+
+
 @numba.njit(cache=True)
 def choose(
     index, q, state: np.ndarray, active: np.ndarray, epsilon: np.ndarray,
@@ -225,12 +291,14 @@ def learn(
     reward: np.ndarray, alpha: float, gamma: float, zones: tuple,
     rescue_after: int, cap: int,
     steps: np.ndarray, n_bumps: np.ndarray, total: np.ndarray, event: np.ndarray,
+    jint: np.ndarray, jf: np.ndarray, jn: np.ndarray, seq: np.ndarray,
     index, q, keys, dirty, count, q_init,
 ) -> tuple[int, int]:  # fmt: skip
     """Judge and learn the step of robots ``start, start + 1, ...`` (module doc).
 
     ``reward`` holds the reward of each event code; ``rescue_after`` is
-    ``max_steps_before_rescue`` (-1: auto rescue off); ``cap`` the step cap (0: none).
+    ``max_steps_before_rescue`` (-1: auto rescue off); ``cap`` the step cap (0: none);
+    ``jint, jf, jn, seq`` the journal (:func:`update_logged`).
     Returns ``(robot, reason)``: ``RESCUE_DRAW`` before the robot's update (Python
     updates, then draws and maybe rescues), ``TERMINAL`` / ``TRUNCATED`` after it;
     ``(n, DONE)``.
@@ -255,8 +323,8 @@ def learn(
         total[r] += reward[code]
         if not terminal and rescue_after >= 0 and bumps[r] and steps[r] > rescue_after:
             return r, RESCUE_DRAW
-        update(index, q, keys, dirty, count, q_init, alpha, gamma,
-               state[r], a, reward[code], nxt[r], terminal)  # fmt: skip
+        update_logged(index, q, keys, dirty, count, q_init, alpha, gamma, state[r], a,
+                      reward[code], nxt[r], terminal, r, jint, jf, jn, seq)  # fmt: skip
         state[r] = nxt[r]
         if terminal:
             return r, TERMINAL

@@ -15,22 +15,32 @@ keyword without its action bits (``keyword >> 3``).
     b"KOOLIOQT"                      8 bytes magic
     uint32 header_length             then that many bytes of UTF-8 JSON (sorted keys):
                                      format, layout {fields, action_bits, n_actions},
-                                     sensors (the sensor configuration), episodes, ...
+                                     sensors (the sensor configuration), episodes, q_init,
+                                     arena {name, sha256} (where it was learned), ...
     uint64 n_rows
     uint64 state_key[n_rows]         ascending
     float64 q[n_rows][n_actions]
     uint32 crc32                     of every byte before it
 
+Reading checks everything, checksum first and then every header field and row (a file
+with a valid checksum but ``episodes: -5`` or a key beyond its layout is refused with a
+one-line :class:`~koolio_pymunk.errors.QTableError` naming the item).
+
 The paper keeps a table file and a backup file, both created empty when missing, read at
 start and written at the end of every episode. :class:`QTableStore` writes each one
 atomically (temporary file, flush, fsync, rename) and keeps the previous good table in
-the backup, so a crash at any moment leaves a loadable table.
+the backup, so a crash at any moment leaves a loadable table. A torn table (checksum
+mismatch) falls back to the backup with a warning; an unreadable one (permissions, I/O
+error) is refused, since its backup is one episode behind and resuming from it would
+repeat episode numbers for ever. The store holds the table's lock
+(:mod:`koolio_pymunk.locks`) from :meth:`QTableStore.open` to :meth:`QTableStore.close`.
 """
 
 from __future__ import annotations
 
 import json
 import math
+import stat
 import struct
 import sys
 import zlib
@@ -41,12 +51,21 @@ from typing import Any
 
 import numpy as np
 
-from .errors import QTableError, located
-from .files import atomic_write
+from .errors import FileError, QTableError, located
+from .files import atomic_write, file_error, read_bytes, remove_stale_temps
+from .locks import FileLock
+from .robot_runtime import is_number
 
 MAGIC = b"KOOLIOQT"
 FORMAT_VERSION = 1
 N_ACTIONS = 5
+#: Keywords are 64-bit (state keys are stored as uint64 and handled as int64).
+MAX_KEYWORD_BITS = 64
+#: Largest number of codes of one state field, and of actions, a file may declare.
+MAX_LEVELS = 1 << 16
+MAX_ACTIONS = 64
+#: Largest table file read (the paper's whole dense table would be 114 MiB).
+MAX_TABLE_BYTES = 1 << 30
 
 
 @dataclass(frozen=True)
@@ -191,8 +210,10 @@ class QTable:
 
     @classmethod
     def from_bytes(cls, data: bytes, source: str = "<bytes>") -> QTable:
-        def bad(problem: str) -> QTableError:
-            return QTableError(located(source, "", problem))
+        """Parse and check a table file's bytes; :class:`QTableError` (one line) if bad."""
+
+        def bad(problem: str, item: str = "") -> QTableError:
+            return QTableError(located(source, item, problem))
 
         if len(data) < len(MAGIC) + 4 + 8 + 4 or data[: len(MAGIC)] != MAGIC:
             raise bad("not a koolio-pymunk Q-table file (bad magic or too short)")
@@ -202,14 +223,13 @@ class QTable:
         pos = len(MAGIC)
         (hlen,) = struct.unpack_from("<I", data, pos)
         pos += 4
+        if pos + hlen + 8 > len(data) - 4:
+            raise bad("corrupt (header length beyond the end of the file)")
         try:
-            header = json.loads(data[pos : pos + hlen])
-            layout = KeywordLayout.from_json(header.pop("layout"))
-        except (ValueError, KeyError, TypeError) as exc:
-            raise bad(f"unreadable header ({exc})") from None
-        if header.pop("format", None) != FORMAT_VERSION:
-            raise bad(f"unsupported format version (this program reads {FORMAT_VERSION})")
-        q_init = float(header.pop("q_init", 0.0))
+            header = json.loads(data[pos : pos + hlen], parse_constant=_no_constant)
+        except (ValueError, RecursionError) as exc:
+            raise bad(f"unreadable header ({_short(exc)})") from None
+        layout, q_init = check_header(header, source)
         pos += hlen
         (n,) = struct.unpack_from("<Q", data, pos)
         pos += 8
@@ -218,8 +238,101 @@ class QTable:
             raise bad("corrupt or truncated (length does not match the row count)")
         keys = np.frombuffer(data, dtype="<u8", count=n, offset=pos)
         values = np.frombuffer(data, dtype="<f8", count=n * na, offset=pos + 8 * n)
+        _check_rows(keys, values, layout, source)
         rows = {int(k): values[i * na : (i + 1) * na].tolist() for i, k in enumerate(keys)}
         return cls(layout, header, q_init, rows)
+
+
+def _no_constant(name: str) -> float:
+    raise ValueError(f"{name} is not a number")
+
+
+def _short(exc: BaseException, limit: int = 80) -> str:
+    text = str(exc).replace("\n", " ") or type(exc).__name__
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _is_int(v: Any) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool)
+
+
+def check_header(header: Any, source: str) -> tuple[KeywordLayout, float]:
+    """Check every field of a table file's JSON header; pops ``format``, ``layout`` and
+    ``q_init`` (the rest is the table's ``meta``). Returns the layout and ``q_init``."""
+
+    def bad(item: str, problem: str) -> QTableError:
+        return QTableError(located(source, f"header.{item}", problem))
+
+    if not isinstance(header, dict):
+        raise QTableError(located(source, "header", "not a JSON object"))
+    if header.pop("format", None) != FORMAT_VERSION:
+        raise QTableError(
+            located(source, "", f"unsupported format version (this program reads {FORMAT_VERSION})")
+        )
+    layout = _check_layout(header.pop("layout", None), source)
+    q_init = header.pop("q_init", 0.0)
+    if not is_number(q_init):
+        raise bad("q_init", f"must be a finite number, got {_show(q_init)}")
+    episodes = header.get("episodes", 0)
+    if not _is_int(episodes) or episodes < 0:
+        raise bad("episodes", f"must be an integer >= 0, got {_show(episodes)}")
+    sensors = header.get("sensors", {})
+    if not isinstance(sensors, dict):
+        raise bad("sensors", f"must be a mapping, got {_show(sensors)}")
+    arena = header.get("arena")
+    if arena is not None and not (
+        isinstance(arena, dict)
+        and isinstance(arena.get("name"), str)
+        and isinstance(arena.get("sha256"), str)
+    ):
+        raise bad("arena", f"must be {{name, sha256}}, got {_show(arena)}")
+    return layout, float(q_init)
+
+
+def _check_layout(data: Any, source: str) -> KeywordLayout:
+    def bad(item: str, problem: str) -> QTableError:
+        return QTableError(located(source, f"header.layout{item}", problem))
+
+    if not isinstance(data, dict):
+        raise bad("", f"must be a mapping, got {_show(data)}")
+    fields = data.get("fields")
+    if not isinstance(fields, list) or not fields:
+        raise bad(".fields", "must be a non-empty list of [name, levels]")
+    out = []
+    for i, f in enumerate(fields):
+        ok = isinstance(f, list) and len(f) == 2 and isinstance(f[0], str) and _is_int(f[1])
+        if not ok or not 1 <= f[1] <= MAX_LEVELS:
+            raise bad(f".fields[{i}]", f"must be [name, levels 1..{MAX_LEVELS}], got {_show(f)}")
+        out.append((f[0], f[1]))
+    na = data.get("n_actions")
+    if not _is_int(na) or not 1 <= na <= MAX_ACTIONS:
+        raise bad(".n_actions", f"must be an integer 1..{MAX_ACTIONS}, got {_show(na)}")
+    layout = KeywordLayout(tuple(out), na)
+    if "action_bits" in data and data["action_bits"] != layout.action_bits:
+        raise bad(".action_bits", f"{_show(data['action_bits'])}, expected {layout.action_bits}")
+    if layout.total_bits > MAX_KEYWORD_BITS:
+        raise bad("", f"a {layout.total_bits}-bit keyword does not fit {MAX_KEYWORD_BITS} bits")
+    return layout
+
+
+def _check_rows(keys: np.ndarray, values: np.ndarray, layout: KeywordLayout, source: str) -> None:
+    """State keys ascending and within the layout's bits; every Q value finite."""
+    if len(keys) == 0:
+        return
+    if len(keys) > 1 and not bool(np.all(keys[1:] > keys[:-1])):
+        raise QTableError(located(source, "rows", "state keys not in ascending order"))
+    state_bits = layout.total_bits - layout.action_bits
+    if state_bits < 64 and int(keys[-1]) >> state_bits:
+        raise QTableError(
+            located(source, "rows", f"state key {int(keys[-1])} beyond the {state_bits}-bit layout")
+        )
+    if not bool(np.all(np.isfinite(values))):
+        raise QTableError(located(source, "rows", "a Q value is not a finite number"))
+
+
+def _show(value: Any, limit: int = 40) -> str:
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 def backup_path(path: Path) -> Path:
@@ -229,63 +342,121 @@ def backup_path(path: Path) -> Path:
 class QTableStore:
     """A Q-table file and its backup (``<file>.bak``), as the paper keeps them.
 
-    ``open`` reads the table (creating both files empty when missing); ``save`` writes
-    the previous good table to the backup and the new one to the file, each atomically.
+    :meth:`open` locks the table (one writer at a time), reads it (creating both files
+    empty when missing); :meth:`save` writes the previous good table to the backup and
+    the new one to the file, each atomically; :meth:`close` releases the lock. ``open``
+    is :meth:`load` then, for a new table, :meth:`create`: a caller that must check
+    something before any file is written (the training log) calls them itself.
     """
 
-    def __init__(self, path: str | Path, warn=None) -> None:
+    def __init__(self, path: str | Path, warn=None, purpose: str = "koolio-pm") -> None:
         self.path = Path(path)
         self.backup = backup_path(self.path)
         self._warn = warn or (lambda msg: print(f"warning: {msg}", file=sys.stderr))
         self._last: bytes | None = None
+        self._lock = FileLock(self.path, purpose)
+        self.fresh = False
+        """True when :meth:`load` found no table (a new one starts at episode 0)."""
 
-    def open(self, layout: KeywordLayout, sensors: dict[str, Any], q_init: float) -> QTable:
-        """Load the table, checking it was made for ``layout`` and ``sensors``."""
-        table = self._load_existing()
-        if table is None:
-            table = QTable(layout, {"sensors": sensors, "episodes": 0}, q_init)
-            self._last = table.to_bytes()
-            self._ensure_dir()
-            atomic_write(self.path, self._last)
-            atomic_write(self.backup, self._last)
-            return table
-        check_compatible(table, layout, sensors, str(self.path))
+    def open(
+        self,
+        layout: KeywordLayout,
+        sensors: dict[str, Any],
+        q_init: float,
+        arena: dict[str, str] | None = None,
+    ) -> QTable:
+        """Lock, then load the table (checking it was made for ``layout`` and ``sensors``;
+        a table learned in another ``arena`` gives a warning), or create it."""
+        table = self.load(layout, sensors, q_init, arena)
+        if self.fresh:
+            self.create(table)
         return table
+
+    def lock(self) -> None:
+        """Take the table's lock (:class:`~koolio_pymunk.errors.InUseError` if another
+        process writes it) and remove what interrupted writes of it left behind."""
+        if self._lock.held:
+            return
+        self._lock.acquire()
+        for p in (self.path, self.backup):
+            remove_stale_temps(p, owned=True)
+
+    def load(
+        self,
+        layout: KeywordLayout,
+        sensors: dict[str, Any],
+        q_init: float,
+        arena: dict[str, str] | None = None,
+    ) -> QTable:
+        """Lock and read the table, or make a new empty one (``fresh``) without writing.
+        On any error the lock is released again."""
+        self.lock()
+        try:
+            table = self._load_existing()
+            self.fresh = table is None
+            if table is None:
+                meta: dict[str, Any] = {"sensors": sensors, "episodes": 0}
+                if arena is not None:
+                    meta["arena"] = dict(arena)
+                return QTable(layout, meta, q_init)
+            check_compatible(table, layout, sensors, str(self.path), arena, self._warn)
+        except BaseException:
+            self.close()
+            raise
+        return table
+
+    def create(self, table: QTable) -> None:
+        """Write a new table to the file and the backup."""
+        self.lock()
+        self._last = table.to_bytes()
+        atomic_write(self.path, self._last)
+        atomic_write(self.backup, self._last)
+        self.fresh = False
 
     def save(self, table: QTable) -> None:
         """Write ``table``: the previous good table goes to the backup first."""
+        self.lock()
         data = table.to_bytes()
-        self._ensure_dir()
         if self._last is not None and self._last != data:
             atomic_write(self.backup, self._last)
         atomic_write(self.path, data)
         self._last = data
 
-    def _ensure_dir(self) -> None:
-        if not self.path.parent.exists():
-            self.path.parent.mkdir(parents=True, exist_ok=True)
+    def close(self) -> None:
+        """Release the lock (the files stay as last saved)."""
+        self._lock.release()
+
+    def __enter__(self) -> QTableStore:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
 
     def _load_existing(self) -> QTable | None:
         main_err: QTableError | None = None
         if self.path.exists():
             try:
-                data = self.path.read_bytes()
+                data = _read_table(self.path)
+            except FileError as exc:  # unreadable: refused, never replaced by the backup
+                raise FileError(
+                    f"{exc} (fix it and run again; its backup is not used in its place)"
+                ) from None
+            try:
                 table = QTable.from_bytes(data, str(self.path))
                 self._last = data
                 return table
             except QTableError as exc:
                 main_err = exc
-            except OSError as exc:
-                main_err = QTableError(located(str(self.path), "", f"cannot read: {exc}"))
         if self.backup.exists():
             try:
-                data = self.backup.read_bytes()
+                data = _read_table(self.backup)
                 table = QTable.from_bytes(data, str(self.backup))
-            except (QTableError, OSError) as exc:
+            except (QTableError, FileError) as exc:
+                why = str(exc)
                 if main_err is not None:
-                    raise QTableError(f"{main_err}; backup unusable too: {exc}") from None
+                    raise QTableError(f"{main_err}; backup unusable too: {why}") from None
                 raise QTableError(
-                    located(str(self.path), "", f"missing, and its backup is unusable: {exc}")
+                    located(str(self.path), "", f"missing, and its backup is unusable: {why}")
                 ) from None
             why = main_err if main_err is not None else f"{self.path}: missing"
             self._warn(f"{why}; using the backup {self.backup}")
@@ -296,20 +467,40 @@ class QTableStore:
         return None
 
 
+def _read_table(path: Path) -> bytes:
+    """A table file's bytes (a regular file of at most :data:`MAX_TABLE_BYTES`)."""
+    try:
+        if not stat.S_ISREG(path.stat().st_mode):
+            raise FileError(located(str(path), "", "not a regular file"))
+    except OSError as exc:
+        raise file_error(path, "read", exc) from None
+    return read_bytes(path, MAX_TABLE_BYTES, "Q-table file")
+
+
 def load_qtable(path: str | Path) -> QTable:
     """Read a table file (no backup fallback); QTableError when missing or bad."""
     p = Path(path)
     try:
-        data = p.read_bytes()
-    except OSError as exc:
-        raise QTableError(located(str(p), "", f"cannot read: {exc.strerror}")) from None
+        data = _read_table(p)
+    except FileError as exc:
+        raise QTableError(str(exc)) from None
     return QTable.from_bytes(data, str(p))
 
 
+_warned: set[tuple[str, str, str]] = set()
+
+
 def check_compatible(
-    table: QTable, layout: KeywordLayout, sensors: dict[str, Any], source: str
+    table: QTable,
+    layout: KeywordLayout,
+    sensors: dict[str, Any],
+    source: str,
+    arena: dict[str, str] | None = None,
+    warn=None,
 ) -> None:
-    """Refuse a table made for another keyword layout or sensor configuration."""
+    """Refuse a table made for another keyword layout or sensor configuration; warn (once
+    per process) when it was learned in another arena than ``arena`` (a record of
+    :func:`koolio_pymunk.arena.arena_record`): it still loads, e.g. in an edited arena."""
     if table.layout != layout:
         raise QTableError(
             located(
@@ -319,15 +510,31 @@ def check_compatible(
             )
         )
     theirs = table.meta.get("sensors", {})
-    for key in sorted(set(theirs) | set(sensors)):
+    if not isinstance(theirs, dict):
+        raise QTableError(located(source, "sensors", f"not a mapping: {_show(theirs)}"))
+    for key in sorted(set(theirs) | set(sensors), key=str):
         if theirs.get(key) != sensors.get(key):
             raise QTableError(
                 located(
                     source,
                     f"sensors.{key}",
-                    f"table made for {theirs.get(key)!r}, this run uses {sensors.get(key)!r}",
+                    f"table made for {_show(theirs.get(key), 80)}, "
+                    f"this run uses {_show(sensors.get(key), 80)}",
                 )
             )
+    learned = table.meta.get("arena")
+    if arena is None or not isinstance(learned, dict) or learned == arena:
+        return
+    key = (source, json.dumps(learned, sort_keys=True), json.dumps(arena, sort_keys=True))
+    if key in _warned:
+        return
+    _warned.add(key)
+    message = (
+        f"{source}: learned in arena {learned.get('name')!r} (content "
+        f"{learned.get('sha256')}), used in arena {arena.get('name')!r} (content "
+        f"{arena.get('sha256')}); it loads (same sensors), but its policy was learned elsewhere"
+    )
+    (warn or (lambda msg: print(f"warning: {msg}", file=sys.stderr)))(message)
 
 
 def _fmt_layout(layout: KeywordLayout) -> str:

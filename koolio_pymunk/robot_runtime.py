@@ -50,6 +50,7 @@ camera to the goal's plate and to the nearest end-of-world marker, ``None`` (or
 from __future__ import annotations
 
 import bisect
+import contextlib
 import csv
 import io
 import itertools
@@ -64,6 +65,8 @@ from typing import Any
 
 FORMAT = "koolio-policy"
 VERSION = 1
+#: Largest policy file read (a table of a million states is about 300 MiB of JSON).
+MAX_POLICY_BYTES = 1 << 30
 #: The paper's five actions; an action's index is the low bits of the keyword.
 ACTION_NAMES = ("Stop", "RotateLeft", "RotateRight", "Forward", "Reverse")
 STOP = 0
@@ -261,7 +264,7 @@ class Policy:
         self.rewards: dict[str, float] = dict(doc.get("rewards") or {})
         self.q_init = float(doc["q_init"])
         self.episodes = int(doc["episodes"])
-        names = doc.get("actions") or ACTION_NAMES
+        names = doc.get("actions") or list(ACTION_NAMES)
         self.actions = [str(n) for n in names][: self.layout.n_actions]
         self.extra = {k: v for k, v in doc.items() if k not in _KNOWN_KEYS}
         self.rows: dict[int, list[float]] = {}
@@ -275,10 +278,14 @@ class Policy:
     def load(cls, path: str) -> Policy:
         """Read and validate a policy file; PolicyError (one line) when it is bad."""
         try:
-            with open(path, encoding="utf-8") as fh:
-                text = fh.read()
+            with open(path, "rb") as fh:
+                data = fh.read(MAX_POLICY_BYTES + 1)
         except OSError as exc:
             raise _err(str(path), "", f"cannot read: {exc.strerror}") from None
+        if len(data) > MAX_POLICY_BYTES:
+            raise _err(str(path), "", f"larger than {MAX_POLICY_BYTES >> 20} MiB: not a policy")
+        try:
+            text = data.decode("utf-8")
         except UnicodeDecodeError:
             raise _err(str(path), "", "not a policy file (not UTF-8 text)") from None
         return cls.loads(text, str(path))
@@ -288,7 +295,10 @@ class Policy:
         try:
             doc = json.loads(text, parse_constant=_reject_constant)
         except ValueError as exc:
-            raise _err(source, "", f"not a policy file (invalid JSON: {exc})") from None
+            problem = str(exc).split(";")[0][:120]
+            raise _err(source, "", f"not a policy file (invalid JSON: {problem})") from None
+        except RecursionError:
+            raise _err(source, "", "not a policy file (JSON nested too deeply)") from None
         return cls(doc, source)
 
     def to_document(self, written_by: str = "robot_runtime") -> dict[str, Any]:
@@ -533,29 +543,60 @@ def validate_document(doc: Any, source: str = "<policy>") -> None:
             raise _err(source, key, "missing")
     _check_layout(doc["layout"], source)
     _check_encoding(doc, source)
-    if not _is_number(doc["q_init"]):
+    if not isinstance(doc["sensors"], dict):
+        raise _err(source, "sensors", f"must be a mapping, got {_show(doc['sensors'])}")
+    actions = doc.get("actions")
+    if actions is not None and (
+        not isinstance(actions, list)
+        or not all(isinstance(a, str) for a in actions)
+        or len(actions) < doc["layout"]["n_actions"]
+    ):
+        raise _err(
+            source, "actions", f"must be a list of {doc['layout']['n_actions']} action names"
+        )
+    if not is_number(doc["q_init"]):
         raise _err(source, "q_init", "must be a finite number")
-    if not _is_int(doc["episodes"]) or doc["episodes"] < 0:
+    if not _is_int(doc["episodes"]) or not 0 <= doc["episodes"] < 1 << 63:
         raise _err(source, "episodes", "must be an integer >= 0")
     for key in ("learner", "rewards"):
         sec = doc.get(key) or {}
-        if not isinstance(sec, dict) or not all(_is_number(v) for v in sec.values()):
+        if not isinstance(sec, dict) or not all(is_number(v) for v in sec.values()):
             raise _err(source, key, "must map names to finite numbers")
     _check_entries(doc, source)
+
+
+#: Bounds of a policy's integers (a 64-bit keyword, at most 64 actions, sensors, levels).
+MAX_KEYWORD_BITS = 64
+MAX_ACTIONS = 64
+MAX_LEVELS = 1 << 16
+MAX_SENSORS = 1024
 
 
 def _check_layout(lay: Any, source: str) -> None:
     if not isinstance(lay, dict) or not isinstance(lay.get("fields"), list) or not lay["fields"]:
         raise _err(source, "layout.fields", "must be a non-empty list")
     na = lay.get("n_actions")
-    if not _is_int(na) or na < 1:
-        raise _err(source, "layout.n_actions", "must be an integer >= 1")
+    if not _is_int(na) or not 1 <= na <= MAX_ACTIONS:
+        raise _err(source, "layout.n_actions", f"must be an integer 1..{MAX_ACTIONS}")
+    if len(lay["fields"]) > MAX_KEYWORD_BITS:
+        raise _err(source, "layout.fields", f"more than {MAX_KEYWORD_BITS} fields")
     fields = []
     for i, f in enumerate(lay["fields"]):
-        if not isinstance(f, dict) or not _is_int(f.get("levels")) or f["levels"] < 1:
-            raise _err(source, f"layout.fields[{i}]", "needs name and levels >= 1")
-        fields.append((str(f.get("name")), f["levels"]))
+        if (
+            not isinstance(f, dict)
+            or not isinstance(f.get("name"), str)
+            or not _is_int(f.get("levels"))
+            or not 1 <= f["levels"] <= MAX_LEVELS
+        ):
+            raise _err(source, f"layout.fields[{i}]", f"needs a name and levels 1..{MAX_LEVELS}")
+        fields.append((f["name"], f["levels"]))
     expect = Layout(fields, na)
+    if expect.total_bits > MAX_KEYWORD_BITS:
+        raise _err(
+            source,
+            "layout",
+            f"a {expect.total_bits}-bit keyword does not fit {MAX_KEYWORD_BITS} bits",
+        )
     for i, f in enumerate(lay["fields"]):
         for key, want in (("bits", expect.bits[i]), ("shift", expect.shifts[i])):
             if key in f and f[key] != want:
@@ -570,10 +611,33 @@ def _check_layout(lay: Any, source: str) -> None:
 
 def _check_encoding(doc: dict[str, Any], source: str) -> None:
     enc = doc["encoding"]
-    try:
-        encoder = Encoder(enc)
-    except (KeyError, TypeError, ValueError) as exc:
-        raise _err(source, "encoding", f"missing or malformed item ({exc})") from None
+    if not isinstance(enc, dict):
+        raise _err(source, "encoding", "must be a mapping")
+    ths = enc.get("thresholds")
+    if not isinstance(ths, dict):
+        raise _err(source, "encoding.thresholds", "must map sonar and camera to lists")
+    for name in ("sonar", "camera"):
+        values = ths.get(name)
+        if not isinstance(values, list) or not all(is_number(v) for v in values):
+            raise _err(source, f"encoding.thresholds.{name}", "must be a list of finite numbers")
+        if len(values) > MAX_SENSORS:
+            raise _err(source, f"encoding.thresholds.{name}", "too many thresholds")
+    for name in ("n_sonar", "n_camera"):
+        value = enc.get(name)
+        if not _is_int(value) or not 0 <= value <= MAX_SENSORS:
+            raise _err(source, f"encoding.{name}", f"must be an integer 0..{MAX_SENSORS}")
+    groups = enc.get("sonar_groups")
+    if (
+        not isinstance(groups, list)
+        or len(groups) > MAX_SENSORS
+        or not all(isinstance(g, list) and all(_is_int(i) for i in g) for g in groups)
+    ):
+        raise _err(source, "encoding.sonar_groups", "must be a list of lists of sonar indices")
+    if not is_number(enc.get("max_camera_view")):
+        raise _err(source, "encoding.max_camera_view", "must be a finite number")
+    if not isinstance(enc.get("compass_in_state"), bool):
+        raise _err(source, "encoding.compass_in_state", "must be true or false")
+    encoder = Encoder(enc)
     for name, ts in (("sonar", encoder.sonar_thresholds), ("camera", encoder.camera_thresholds)):
         if not ts or any(b <= a for a, b in itertools.pairwise(ts)):
             raise _err(source, f"encoding.thresholds.{name}", "must be increasing, non-empty")
@@ -599,11 +663,11 @@ def _check_entries(doc: dict[str, Any], source: str) -> None:
     seen = set()
     for i, e in enumerate(entries):
         item = f"entries[{i}]"
-        if not isinstance(e, dict) or not _is_int(e.get("keyword")) or not _is_number(e.get("q")):
+        if not isinstance(e, dict) or not _is_int(e.get("keyword")) or not is_number(e.get("q")):
             raise _err(source, item, "needs an integer keyword and a finite number q")
         kw = e["keyword"]
         if not 0 <= kw < limit or (kw & amask) >= layout.n_actions:
-            raise _err(source, item, f"keyword {kw} out of range for the layout")
+            raise _err(source, item, f"keyword {_show(kw)} out of range for the layout")
         codes, _ = layout.decode(kw)
         if any(c >= lv for c, lv in zip(codes, layout.levels)):
             raise _err(source, item, f"keyword {kw} has a code beyond its field's levels")
@@ -618,8 +682,24 @@ def _is_int(v: Any) -> bool:
     return isinstance(v, int) and not isinstance(v, bool)
 
 
-def _is_number(v: Any) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+def is_number(v: Any) -> bool:
+    """A finite int or float, not a bool (an integer beyond the float range is not).
+    The simulator's readers use this one too.
+
+    >>> [is_number(v) for v in (1, 2.5, True, float("inf"), 10**400, "1")]
+    [True, True, False, False, False, False]
+    """
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        return False
+    try:
+        return math.isfinite(v)
+    except OverflowError:
+        return False
+
+
+def _show(value: Any, limit: int = 40) -> str:
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 def dump_document(doc: dict[str, Any]) -> str:
@@ -639,8 +719,32 @@ def _pretty(value: Any, pad: str, width: int = 96) -> str:
     return "[\n" + ",\n".join(items) + f"\n{pad}]"
 
 
+def _remove_stale_temps(directory: str, base: str) -> None:
+    """Remove ``.<base>.tmp<pid>`` files of processes that no longer run (a write cut
+    short by a crash or SIGKILL)."""
+    if sys.platform == "win32":  # os.kill(pid, 0) would terminate the process there
+        return
+    prefix = f".{base}.tmp"
+    try:
+        names = os.listdir(directory)
+    except OSError:
+        return
+    for name in names:
+        pid = name[len(prefix) :]
+        if not name.startswith(prefix) or not pid.isdigit() or int(pid) == os.getpid():
+            continue
+        try:
+            os.kill(int(pid), 0)
+        except ProcessLookupError:  # no such process: its file is stale
+            with contextlib.suppress(OSError):
+                os.unlink(os.path.join(directory, name))
+        except OSError:  # it runs, as another user
+            pass
+
+
 def _atomic(path: str, write) -> None:
     directory = os.path.dirname(os.path.abspath(path))
+    _remove_stale_temps(directory, os.path.basename(path))
     tmp = os.path.join(directory, f".{os.path.basename(path)}.tmp{os.getpid()}")
     try:
         write(tmp)
@@ -663,13 +767,23 @@ def atomic_write_text(path: str, text: str) -> None:
 
 
 class EpisodeLog:
-    """Appends one CSV row per episode, in ``koolio-pm train``'s log format."""
+    """Appends one CSV row per episode, in ``koolio-pm train``'s log format. A file that
+    exists must already be such a log (its first line the header): anything else is
+    refused with a :class:`PolicyError` and left untouched."""
 
     def __init__(self, path: str) -> None:
         self.path = path
         new = not os.path.exists(path) or os.path.getsize(path) == 0
         if new:
             self._write(list(LOG_FIELDS))
+            return
+        try:
+            with open(path, "rb") as fh:
+                first = fh.readline(1000).rstrip(b"\r\n")
+        except OSError as exc:
+            raise _err(path, "", f"cannot read: {exc.strerror}") from None
+        if first != ",".join(LOG_FIELDS).encode():
+            raise _err(path, "line 1", "not a training log (its first line is not the header)")
 
     def _write(self, row: list[str]) -> None:
         buf = io.StringIO()

@@ -50,6 +50,14 @@ the driver, which writes them, so Ray workers need no shared filesystem (but nee
 ``results.csv`` (or a ``result.json``); an interrupted run is redone from its start. A
 run's id includes a hash of its full resolved configuration, so changing a setting (or a
 default) makes new runs rather than mixing results.
+
+**Faults.** A sweep holds a lock on its output folder (``.sweep.lock``): a second sweep
+into the same folder is refused. Local workers are processes of this module's own pool:
+a worker that dies (killed, out of memory) fails only the run it was running, which is
+reported, and a new worker takes the remaining runs (as on Ray, where a lost task fails
+alone). Each run works in a temporary folder named after its process
+(``koolio-sweep-<pid>-...``); folders of processes that no longer run (a killed worker)
+are removed when the next run starts.
 """
 
 from __future__ import annotations
@@ -65,6 +73,8 @@ import itertools
 import json
 import os
 import re
+import shutil
+import tempfile
 import time
 from collections.abc import Callable, Iterable
 from pathlib import Path
@@ -113,6 +123,10 @@ RESULT_COLUMNS = (
     "table_sha256",
 )
 EVAL_SEED_OFFSET = 1_000_000
+#: Most runs (configurations x seeds) one spec may plan.
+MAX_RUNS = 10_000
+#: Largest spec file read.
+MAX_SPEC_BYTES = 256 * 1024
 
 
 # --- command line ---------------------------------------------------------------------
@@ -190,18 +204,16 @@ class SweepSpec:
 
 def load_spec(path: str | Path) -> SweepSpec:
     """Read and check a sweep spec; ConfigError (one line) on any problem."""
-    from .arena import parse_yaml_text
+    from .files import read_text
+    from .yamlfile import parse_yaml
 
     p = Path(path)
     src = str(p)
     try:
-        text = p.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ConfigError(located(src, "", f"cannot read: {exc.strerror}")) from None
-    try:
-        data = parse_yaml_text(text, src)
+        text = read_text(p, MAX_SPEC_BYTES, "sweep spec")
     except KoolioError as exc:
         raise ConfigError(str(exc)) from None
+    data = parse_yaml(text, src, ConfigError)
     return parse_spec(data, src, p.parent, default_name=p.stem, text=text)
 
 
@@ -347,8 +359,15 @@ def plan(spec: SweepSpec) -> list[dict[str, Any]]:
     from .arena import load_arena
     from .config import load_config
 
-    combos = [dict(zip(spec.grid, values)) for values in itertools.product(*spec.grid.values())]
     variants = spec.runs or [{}]
+    n_runs = len(variants) * len(spec.seeds)
+    for values in spec.grid.values():
+        n_runs *= len(values)
+    if n_runs > MAX_RUNS:
+        raise ConfigError(
+            located(spec.source, "grid", f"{n_runs:,} runs (the limit is {MAX_RUNS:,})")
+        )
+    combos = [dict(zip(spec.grid, values)) for values in itertools.product(*spec.grid.values())]
     tasks: list[dict[str, Any]] = []
     seen: dict[str, str] = {}
     arenas: dict[tuple[str, float], Any] = {}
@@ -441,8 +460,6 @@ def run_one(task: dict[str, Any]) -> dict[str, Any]:
     Returns ``{"row": result row, "files": {name: bytes}}``; the driver writes the
     files. Depends only on the task (never on the process or node).
     """
-    import tempfile
-
     from .config import config_from_dict
     from .env import KoolioEnv
     from .qtable import QTableStore
@@ -456,7 +473,8 @@ def run_one(task: dict[str, Any]) -> dict[str, Any]:
     competence: tuple[int, float] | None = None
     train_seconds = 0.0
     results = []
-    with tempfile.TemporaryDirectory(prefix="koolio-sweep-") as tmp:
+    remove_stale_run_folders()
+    with tempfile.TemporaryDirectory(prefix=f"{RUN_FOLDER_PREFIX}{os.getpid()}-") as tmp:
         store = QTableStore(Path(tmp) / "qtable.qtable", warn=lambda msg: None)
         log = Path(tmp) / "train.csv"
         done = 0
@@ -519,6 +537,31 @@ def run_one(task: dict[str, Any]) -> dict[str, Any]:
     }
 
 
+#: Temporary run folders: ``<tmp>/koolio-sweep-<pid>-<random>``.
+RUN_FOLDER_PREFIX = "koolio-sweep-"
+
+
+def remove_stale_run_folders(base: str | None = None) -> list[str]:
+    """Remove the temporary run folders of processes that no longer run (killed workers,
+    interrupted sweeps); returns their names."""
+    from .files import process_alive
+
+    base = base or tempfile.gettempdir()
+    pattern = re.compile(rf"^{re.escape(RUN_FOLDER_PREFIX)}(\d+)-")
+    removed = []
+    try:
+        names = os.listdir(base)
+    except OSError:
+        return removed
+    for name in names:
+        m = pattern.match(name)
+        if m is None or int(m.group(1)) == os.getpid() or process_alive(int(m.group(1))):
+            continue
+        shutil.rmtree(os.path.join(base, name), ignore_errors=True)
+        removed.append(name)
+    return removed
+
+
 def _csv_bytes(rows: list[dict[str, Any]], columns: Iterable[str] | None = None) -> bytes:
     cols = list(columns) if columns is not None else (list(rows[0]) if rows else [])
     buf = io.StringIO()
@@ -549,13 +592,20 @@ class Results:
     """``results.csv``: one row per finished run, rewritten atomically after each run."""
 
     def __init__(self, path: Path) -> None:
+        from .files import read_text
+
         self.path = path
         self.rows: dict[str, dict[str, str]] = {}
         if path.exists():
-            with open(path, newline="", encoding="utf-8") as fh:
-                for row in csv.DictReader(fh):
-                    if row.get("run_id"):
-                        self.rows[row["run_id"]] = row
+            text = read_text(path, 256 * 1024 * 1024, "results file")
+            reader = csv.DictReader(io.StringIO(text))
+            if text and "run_id" not in (reader.fieldnames or []):
+                raise KoolioError(
+                    located(str(path), "line 1", "not a sweep's results.csv (no run_id column)")
+                )
+            for row in reader:
+                if row.get("run_id"):
+                    self.rows[row["run_id"]] = row
 
     def add(self, row: dict[str, Any]) -> None:
         self.rows[str(row["run_id"])] = {k: _cell(v) for k, v in row.items()}
@@ -587,12 +637,34 @@ def run_sweep(
     address. Local workers are started with ``spawn``: a script calling this must do so
     under ``if __name__ == "__main__":``.
     """
-    from .qtable import atomic_write
+    from .locks import FileLock
 
     say = report or (lambda s: None)
     started = time.perf_counter()
     tasks = plan(spec)
-    out.mkdir(parents=True, exist_ok=True)
+    lock = FileLock(out, "koolio-pm sweep", path=out / ".sweep.lock")
+    if out.exists() and not out.is_dir():
+        raise KoolioError(located(str(out), "", "is a file, not a folder (--out)"))
+    lock.acquire()
+    try:
+        return _run_locked(spec, out, tasks, workers, ray_address, plot, say, started)
+    finally:
+        lock.release()
+
+
+def _run_locked(
+    spec: SweepSpec,
+    out: Path,
+    tasks: list[dict[str, Any]],
+    workers: int | None,
+    ray_address: str | None,
+    plot: bool,
+    say: Callable[[str], None],
+    started: float,
+) -> SweepOutcome:
+    from .files import atomic_write
+
+    remove_stale_run_folders()
     atomic_write(out / "spec.yaml", spec.text.encode())
     results = Results(out / "results.csv")
     order = [t["run_id"] for t in tasks]
@@ -656,9 +728,8 @@ def _read_result(path: Path) -> dict[str, Any] | None:
 
 
 def _write_run(folder: Path, task: dict[str, Any], result: dict[str, Any]) -> None:
-    from .qtable import atomic_write
+    from .files import atomic_write
 
-    folder.mkdir(parents=True, exist_ok=True)
     for name, data in result["files"].items():
         atomic_write(folder / name, data)
     info = {k: v for k, v in task.items() if k not in ("arena_obj", "config")}
@@ -676,9 +747,6 @@ def _run_local(
     finish: Callable[[dict[str, Any], Any], None],
 ) -> None:
     """Local processes (``spawn``: a fresh interpreter per worker, no inherited state)."""
-    import concurrent.futures as cf
-    import multiprocessing
-
     n = workers or _default_workers(len(todo))
     if n == 1:
         for t in todo:
@@ -690,18 +758,134 @@ def _run_local(
                 result = exc
             finish(t, result)
         return
-    ctx = multiprocessing.get_context("spawn")
-    pool = cf.ProcessPoolExecutor(max_workers=min(n, len(todo)), mp_context=ctx)
-    try:
-        futures = {pool.submit(run_one, t): t for t in todo}
-        for fut in cf.as_completed(futures):
-            try:
-                result = fut.result()
-            except Exception as exc:
-                result = exc
-            finish(futures[fut], result)
-    finally:
-        pool.shutdown(wait=True, cancel_futures=True)
+    _Pool(min(n, len(todo))).run(todo, finish)
+
+
+class WorkerDied(RuntimeError):
+    """A local worker process ended while it ran a run (killed, out of memory ...)."""
+
+
+class _Pool:
+    """Worker processes, each running one task at a time sent through its own pipe.
+
+    Unlike ``concurrent.futures.ProcessPoolExecutor`` (whose every pending future fails
+    with ``BrokenProcessPool`` when one worker dies), a dead worker fails only its own
+    task; a new worker takes its place for the tasks left.
+    """
+
+    def __init__(self, size: int, target: Callable[[dict[str, Any]], Any] | None = None) -> None:
+        import multiprocessing
+
+        self.ctx = multiprocessing.get_context("spawn")
+        self.size = size
+        self.target = target or run_one
+        """What a worker runs for each task (a module-level function: it is pickled)."""
+        self.workers: list[list[Any]] = []  # [process, connection, task or None]
+
+    def _start(self) -> list[Any]:
+        parent, child = self.ctx.Pipe()
+        proc = self.ctx.Process(target=_worker, args=(child, self.target), daemon=True)
+        proc.start()
+        child.close()
+        worker = [proc, parent, None]
+        self.workers.append(worker)
+        return worker
+
+    def run(
+        self, todo: list[dict[str, Any]], finish: Callable[[dict[str, Any], Any], None]
+    ) -> None:
+        from multiprocessing.connection import wait
+
+        queue = list(todo)
+        try:
+            for _ in range(self.size):
+                self._start()
+            while True:
+                for w in list(self.workers):
+                    if w[2] is None and queue:
+                        if not w[0].is_alive():  # ended after its last result
+                            self._drop(w)
+                            w = self._start()
+                        w[2] = queue.pop(0)
+                        w[1].send(w[2])
+                busy = [w for w in self.workers if w[2] is not None]
+                if not busy:
+                    return
+                ready = wait([w[1] for w in busy] + [w[0].sentinel for w in busy])
+                for w in busy:
+                    if w[1] in ready or w[0].sentinel in ready:
+                        self._collect(w, finish, bool(queue))
+        finally:
+            self._stop()
+
+    def _collect(self, w: list[Any], finish: Callable[[dict[str, Any], Any], None], more: bool):
+        proc, conn, task = w
+        try:
+            if conn.poll():
+                kind, value = conn.recv()
+                w[2] = None
+                if kind == "interrupted":
+                    raise KeyboardInterrupt
+                finish(task, value)
+                return
+        except (EOFError, OSError):
+            pass
+        if proc.is_alive():  # woke up without a message: not done yet
+            return
+        w[2] = None
+        self._drop(w)
+        finish(task, WorkerDied(f"worker process {proc.pid} died ({_exit_reason(proc.exitcode)})"))
+        if more:
+            self._start()
+
+    def _drop(self, w: list[Any]) -> None:
+        w[0].join()
+        w[1].close()
+        self.workers.remove(w)
+
+    def _stop(self) -> None:
+        for _, conn, _ in self.workers:
+            with contextlib.suppress(OSError, ValueError):
+                conn.send(None)
+        for proc, conn, task in self.workers:
+            proc.join(timeout=2 if task is None else 0.1)
+            if proc.is_alive():
+                proc.terminate()
+                proc.join(timeout=5)
+            conn.close()
+        self.workers = []
+
+
+def _exit_reason(code: int | None) -> str:
+    import signal
+
+    if code is not None and code < 0:
+        with contextlib.suppress(ValueError):
+            return f"killed by {signal.Signals(-code).name}"
+    return f"exit status {code}"
+
+
+def _worker(conn: Any, target: Callable[[dict[str, Any]], Any]) -> None:
+    """A pool worker: run ``target`` on each task received, send back ``(kind, value)``."""
+    while True:
+        try:
+            task = conn.recv()
+        except (EOFError, OSError, KeyboardInterrupt):
+            return
+        if task is None:
+            return
+        try:
+            message: tuple[str, Any] = ("ok", target(task))
+        except KeyboardInterrupt:
+            with contextlib.suppress(OSError):
+                conn.send(("interrupted", None))
+            return
+        except Exception as exc:
+            message = ("error", exc)
+        try:
+            conn.send(message)
+        except Exception:  # the exception does not pickle: send its text
+            conn.send(("error", RuntimeError(f"{type(message[1]).__name__}: {message[1]}")))
 
 
 def _run_ray(

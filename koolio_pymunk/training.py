@@ -6,7 +6,10 @@ The same seed and configuration therefore give byte-identical Q-table files and 
 and a run resumed from its table file continues exactly as an uninterrupted one would
 (as long as no episode was interrupted).
 
-**Log.** One CSV row per finished (or interrupted) episode, appended and flushed::
+**Files.** :func:`open_run` opens a run's Q-table (:class:`~koolio_pymunk.qtable.QTableStore`)
+and its per-episode CSV log (:mod:`koolio_pymunk.episode_log`): both locked against a
+second writer, the log checked before anything is written and brought in step with the
+table. One CSV row per finished (or interrupted) episode is appended and flushed::
 
     episode,reward,steps,bumps,outcome,rescued,epsilon,goal
 
@@ -19,8 +22,8 @@ with ``repr`` so that they round-trip exactly.
 
 from __future__ import annotations
 
-import csv
-import io
+import signal
+import threading
 import time
 from collections import deque
 from collections.abc import Callable
@@ -30,13 +33,13 @@ from typing import Any
 
 import numpy as np
 
+from .arena import arena_record
 from .config import Config
 from .env import KoolioEnv
+from .episode_log import LOG_FIELDS as LOG_FIELDS  # the log's columns, re-exported
+from .episode_log import LogWriter, check_log_path
 from .learner import QLearner
 from .qtable import QTable, QTableStore, load_qtable
-
-LOG_FIELDS = ("episode", "reward", "steps", "bumps", "outcome", "rescued", "epsilon", "goal")
-
 
 #: Seed streams: training and evaluation episodes of the same seed never share starts.
 TRAIN_STREAM, EVAL_STREAM = 0, 1
@@ -107,9 +110,12 @@ def run_episode(
     env: KoolioEnv,
     agent: QLearner,
     learn: bool,
-    stop: Callable[[], bool] | None = None,
+    stop: Callable[[], bool | None] | None = None,
 ) -> tuple[float, int, str]:
-    """Run one episode from a reset env; returns ``(reward, steps, outcome)``."""
+    """Run one episode from a reset env; returns ``(reward, steps, outcome)``.
+
+    ``stop`` is called after every step: a true result ends the episode as
+    ``interrupted`` (it may also raise, e.g. :meth:`SafeInterrupt.check`)."""
     state = env.state_key
     while True:
         action = agent.act(state)
@@ -125,37 +131,45 @@ def run_episode(
             return env.episode_reward, env.steps, "interrupted"
 
 
-class LogWriter:
-    """Appends CSV rows to the log (header once), flushing every row.
+class SafeInterrupt:
+    """Ctrl-C at a safe point: while active, SIGINT only sets :attr:`pending`; the loops
+    check it between steps and raise ``KeyboardInterrupt`` there, so an interrupt never
+    lands between saving the table and writing the episode's log row. A second Ctrl-C
+    interrupts at once. Does nothing outside the main thread (signals go there only).
 
-    ``extra_fields`` are columns after :data:`LOG_FIELDS` (the ``realism.*`` draws of
-    domain randomization)."""
+    >>> with SafeInterrupt() as guard:
+    ...     guard.pending
+    False
+    """
 
-    def __init__(self, path: str | Path | None, extra_fields: tuple[str, ...] = ()) -> None:
-        self.path = Path(path) if path else None
-        self._fh: io.TextIOBase | None = None
-        if self.path is not None:
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-            new = not self.path.exists() or self.path.stat().st_size == 0
-            self._fh = open(self.path, "a", newline="", encoding="utf-8")  # noqa: SIM115
-            if new:
-                self._write([*LOG_FIELDS, *extra_fields])
+    def __init__(self) -> None:
+        self.pending = False
+        self._previous: Any = None
+        self._installed = False
 
-    def _write(self, row: list[str]) -> None:
-        buf = io.StringIO()
-        csv.writer(buf, lineterminator="\n").writerow(row)
-        assert self._fh is not None
-        self._fh.write(buf.getvalue())
-        self._fh.flush()
+    def _handle(self, signum: int, frame: Any) -> None:
+        if self.pending:
+            raise KeyboardInterrupt
+        self.pending = True
 
-    def write(self, result: EpisodeResult) -> None:
-        if self._fh is not None:
-            self._write(result.row())
+    def check(self) -> None:
+        """Raise ``KeyboardInterrupt`` if a Ctrl-C is pending."""
+        if self.pending:
+            self.pending = False
+            raise KeyboardInterrupt
 
-    def close(self) -> None:
-        if self._fh is not None:
-            self._fh.close()
-            self._fh = None
+    def __enter__(self) -> SafeInterrupt:
+        if threading.current_thread() is threading.main_thread():
+            self._previous = signal.getsignal(signal.SIGINT)
+            if self._previous is signal.default_int_handler:  # only replace Python's own
+                signal.signal(signal.SIGINT, self._handle)
+                self._installed = True
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self._installed:
+            signal.signal(signal.SIGINT, self._previous)
+            self._installed = False
 
 
 @dataclass
@@ -201,6 +215,42 @@ class TrainResult:
     results: list[EpisodeResult]
 
 
+def open_run(
+    env: KoolioEnv,
+    store: QTableStore,
+    log_path: str | Path | None,
+    purpose: str = "koolio-pm",
+) -> tuple[QTable, LogWriter]:
+    """Lock and open a run's table and log: the log is checked before any file is written
+    (a new table is created only then) and brought in step with the table
+    (:mod:`koolio_pymunk.episode_log`). The caller closes both."""
+    cfg = env.config
+    try:
+        if log_path is not None and str(log_path) != "":
+            check_log_path(log_path, store.path, tuple(env.randomizer.columns))
+        table = store.load(
+            env.layout, sensor_signature(cfg), cfg.learner.q_init, arena_record(env.arena)
+        )
+        log = LogWriter(
+            log_path,
+            int(table.meta.get("episodes", 0)),
+            store.fresh,
+            store.path,
+            purpose,
+            extra_fields=tuple(env.randomizer.columns),
+        )
+        try:
+            if store.fresh:
+                store.create(table)
+        except BaseException:
+            log.close()
+            raise
+    except BaseException:
+        store.close()
+        raise
+    return table, log
+
+
 def train(
     env: KoolioEnv,
     store: QTableStore,
@@ -215,69 +265,60 @@ def train(
 
     Ctrl-C (KeyboardInterrupt) is the paper's Exit: the unfinished episode's updates are
     kept and the table saved; with ``discard_unfinished`` it is Exit Without Save: the
-    table file stays as it was after the last finished episode.
+    table file stays as it was after the last finished episode. Ctrl-C takes effect
+    between steps (:class:`SafeInterrupt`). The table and the log are locked while it
+    runs (:func:`open_run`); a failed write (disk full) stops it with a
+    :class:`~koolio_pymunk.errors.FileError`, the files holding the last good table.
     """
     cfg = env.config
-    table = store.open(env.layout, sensor_signature(cfg), cfg.learner.q_init)
+    table, log = open_run(env, store, log_path, "koolio-pm train")
     first = int(table.meta.get("episodes", 0))
-    log = LogWriter(log_path, tuple(env.randomizer.columns))
     progress = Progress()
     results: list[EpisodeResult] = []
     agent = QLearner(table, cfg.learner, np.random.default_rng(seed))
     last_report = time.perf_counter()
     interrupted = False
     try:
-        for e in range(first, first + episodes):
-            env_seed, agent.rng = episode_seeds(seed, e)
-            agent.set_episode(e)
-            env.reset(seed=env_seed)
-            reward, steps, outcome = run_episode(env, agent, learn=True)
-            res = EpisodeResult(
-                e,
-                reward,
-                steps,
-                env.bumps,
-                outcome,
-                env.has_been_rescued,
-                agent.epsilon,
-                env.goal_name,
-                realism_values(env),
-            )
-            table.meta["episodes"] = e + 1
-            store.save(table)
-            log.write(res)
-            results.append(res)
-            progress.add(res)
-            now = time.perf_counter()
-            if report and (now - last_report >= report_every or e == first + episodes - 1):
-                report(progress.line(e + 1, first + episodes, agent.epsilon))
-                last_report = now
-    except KeyboardInterrupt:
-        interrupted = True
-        if discard_unfinished:
-            # Nothing to do: the file still holds the table of the last finished episode.
-            table = load_qtable(store.path)
-            if report:
-                report("interrupted: unfinished episode discarded (Exit Without Save)")
-        else:
-            res = EpisodeResult(
-                table.meta.get("episodes", first),
-                env.episode_reward,
-                env.steps,
-                env.bumps,
-                "interrupted",
-                env.has_been_rescued,
-                agent.epsilon,
-                env.goal_name,
-                realism_values(env),
-            )
-            store.save(table)
-            log.write(res)
-            results.append(res)
-            if report:
-                report("interrupted: unfinished episode folded into the Q-table and saved (Exit)")
+        with SafeInterrupt() as guard:
+            try:
+                for e in range(first, first + episodes):
+                    if guard.pending:  # between episodes: nothing unfinished
+                        interrupted = True
+                        if report:
+                            report("interrupted between episodes: nothing unfinished")
+                        break
+                    env_seed, agent.rng = episode_seeds(seed, e)
+                    agent.set_episode(e)
+                    env.reset(seed=env_seed)
+                    reward, steps, outcome = run_episode(env, agent, True, stop=guard.check)
+                    res = EpisodeResult(
+                        e,
+                        reward,
+                        steps,
+                        env.bumps,
+                        outcome,
+                        env.has_been_rescued,
+                        agent.epsilon,
+                        env.goal_name,
+                        realism_values(env),
+                    )
+                    table.meta["episodes"] = e + 1
+                    store.save(table)
+                    log.write(res)
+                    results.append(res)
+                    progress.add(res)
+                    now = time.perf_counter()
+                    if report and (now - last_report >= report_every or e == first + episodes - 1):
+                        report(progress.line(e + 1, first + episodes, agent.epsilon))
+                        last_report = now
+            except KeyboardInterrupt:
+                interrupted = True
+                table = _interrupted(
+                    env, agent, store, table, log, first, discard_unfinished, results, report
+                )
     finally:
         log.close()
+        store.close()
     return TrainResult(
         table,
         progress.episodes,
@@ -287,6 +328,42 @@ def train(
         interrupted,
         results,
     )
+
+
+def _interrupted(
+    env: KoolioEnv,
+    agent: QLearner,
+    store: QTableStore,
+    table: QTable,
+    log: LogWriter,
+    first: int,
+    discard: bool,
+    results: list[EpisodeResult],
+    report: Callable[[str], None] | None,
+) -> QTable:
+    """Ctrl-C in an episode: Exit (fold it in, save, log it ``interrupted``) or Exit Without
+    Save (the file still holds the table of the last finished episode)."""
+    if discard:
+        if report:
+            report("interrupted: unfinished episode discarded (Exit Without Save)")
+        return load_qtable(store.path)
+    res = EpisodeResult(
+        table.meta.get("episodes", first),
+        env.episode_reward,
+        env.steps,
+        env.bumps,
+        "interrupted",
+        env.has_been_rescued,
+        agent.epsilon,
+        env.goal_name,
+        realism_values(env),
+    )
+    store.save(table)
+    log.write(res)
+    results.append(res)
+    if report:
+        report("interrupted: unfinished episode folded into the Q-table and saved (Exit)")
+    return table
 
 
 @dataclass

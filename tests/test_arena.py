@@ -24,7 +24,7 @@ from koolio_pymunk.arena import (
     save_arena,
     validate_arena,
 )
-from koolio_pymunk.errors import ArenaError
+from koolio_pymunk.errors import ArenaError, FileError
 
 ZONE = [[80, 80], [120, 80], [120, 100], [80, 100]]
 BASE: dict = {
@@ -116,7 +116,6 @@ CASES: list[tuple[str, Callable[[dict], None], str, list[str]]] = [
     ("missing name", _drop("name"), "name", ["missing required key"]),
     ("missing walls", _drop("walls"), "walls", ["missing required key"]),
     ("missing goals", _drop("goals"), "goals", ["missing required key"]),
-    ("missing end_of_world", _drop("end_of_world"), "end_of_world", ["missing required key"]),
     ("missing start", _drop("start"), "start", ["missing required key"]),
     ("missing goal at", lambda d: d["goals"][1].pop("at"), "goals[1].at", ["missing"]),
     (
@@ -314,7 +313,6 @@ CASES: list[tuple[str, Callable[[dict], None], str, list[str]]] = [
     ("rotate inf", _set(("rotate_deg",), float("inf")), "rotate_deg", ["not a finite number"]),
     ("rotate bool", _set(("rotate_deg",), True), "rotate_deg", ["not a finite"]),
     ("empty goals", _set(("goals",), []), "goals", ["empty list"]),
-    ("empty end_of_world", _set(("end_of_world",), []), "end_of_world", ["empty list"]),
     ("goal name float", _set(("goals", 0, "name"), 1.5), "goals[0].name", ["not a name"]),
     ("goal not a mapping", _set(("goals", 0), [1, 2]), "goals[0]", ["not a mapping"]),
     ("name not a string", _set(("name",), ["x"]), "name", ["not a non-empty string"]),
@@ -513,7 +511,7 @@ def test_atomic_save_failed_write_leaves_no_temp(
         raise OSError("disk full")
 
     monkeypatch.setattr(arena_mod.os, "replace", bad_replace)
-    with pytest.raises(OSError):
+    with pytest.raises(FileError, match=r"keep\.yaml: cannot write: disk full$"):
         save_arena(arena, path)
     assert path.read_text() == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["keep.yaml"]

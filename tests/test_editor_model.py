@@ -318,14 +318,13 @@ HIGHLIGHTS = [
         (("end_of_world", 0, "zone", 2),),
         (),
     ),
-    (
-        lambda m: m.delete(("end_of_world", 0)),
-        "end_of_world",
-        "empty list: at least one end-of-world marker is needed",
-        (),
-        (),
-    ),
 ]
+
+
+def test_an_arena_without_end_of_world_markers_is_valid() -> None:
+    m = room()
+    m.delete(("end_of_world", 0))
+    assert m.arena.end_of_world == () and m.problem() is None
 
 
 @pytest.mark.parametrize(("change", "item", "problem", "paths", "edges"), HIGHLIGHTS)

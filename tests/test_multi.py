@@ -206,7 +206,7 @@ def test_update_and_choose_match_the_learner() -> None:
 def test_learn_judges_like_the_rules(goal_close: bool, eow: bool, bump: bool) -> None:
     from koolio_pymunk.config import RewardConfig
     from koolio_pymunk.env import EndZones
-    from koolio_pymunk.qkernel import EVENTS, SharedTable, learn, zone_arrays
+    from koolio_pymunk.qkernel import EVENTS, SharedTable, learn, new_journal, zone_arrays
     from koolio_pymunk.qtable import KeywordLayout, QTable
     from koolio_pymunk.rules import judge
 
@@ -224,7 +224,7 @@ def test_learn_judges_like_the_rules(goal_close: bool, eow: bool, bump: bool) ->
         r, why = learn(0, np.ones(1, np.bool_), np.array([action]), np.zeros(1, np.int64),
                        np.ones(1, np.int64), np.array([bump]), np.array([goal_close]), xy,
                        reward, 0.5, 0.9, zone_arrays(zones), -1, 0, steps, bumps, total,
-                       event, *shared.args())  # fmt: skip
+                       event, *new_journal(1, 0), *shared.args())  # fmt: skip
         assert EVENTS[event[0]] == j.event and total[0] == j.reward
         assert (why == 2) == j.terminated and (r, steps[0], bumps[0]) == (
             0 if j.terminated else 1,

@@ -7,7 +7,7 @@ import os
 import pytest
 
 from koolio_pymunk.config import Config
-from koolio_pymunk.errors import QTableError
+from koolio_pymunk.errors import FileError, QTableError
 from koolio_pymunk.qtable import (
     PAPER_ORIGINAL_FIELDS,
     KeywordLayout,
@@ -134,6 +134,7 @@ def test_corrupt_main_falls_back_to_backup_with_warning(tmp_path) -> None:
     store.save(t)
     t.row(2)[0] = 2.0
     store.save(t)
+    store.close()
     store.path.write_bytes(store.path.read_bytes()[:50])  # a torn file
     warnings: list[str] = []
     again = QTableStore(store.path, warn=warnings.append)
@@ -145,6 +146,7 @@ def test_corrupt_main_falls_back_to_backup_with_warning(tmp_path) -> None:
 def test_corrupt_main_and_backup_is_an_error(tmp_path) -> None:
     store = QTableStore(tmp_path / "q.qtable")
     store.open(LAYOUT, SENSORS, 0.0)
+    store.close()
     store.path.write_bytes(b"junk")
     store.backup.write_bytes(b"junk")
     with pytest.raises(QTableError, match="backup unusable"):
@@ -154,6 +156,7 @@ def test_corrupt_main_and_backup_is_an_error(tmp_path) -> None:
 def test_layout_mismatch_is_refused_not_overwritten(tmp_path) -> None:
     store = QTableStore(tmp_path / "q.qtable")
     store.open(LAYOUT, SENSORS, 0.0)
+    store.close()
     before = store.path.read_bytes()
     other = KeywordLayout(LAYOUT.fields[:-1])
     with pytest.raises(QTableError, match="layout: table made for 27-bit keyword"):
@@ -182,7 +185,7 @@ def test_atomic_write_keeps_old_file_when_replace_fails(tmp_path, monkeypatch) -
 
     monkeypatch.setattr(os, "replace", crash)
     t.row(2)[0] = 2.0
-    with pytest.raises(OSError):
+    with pytest.raises(FileError, match="cannot write: disk gone"):
         store.save(t)
     monkeypatch.undo()
     assert store.path.read_bytes() == good

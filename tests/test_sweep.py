@@ -163,7 +163,7 @@ def test_cli_dry_run_and_missing_ray(spec_file, tmp_path, capsys, monkeypatch):
     out = capsys.readouterr().out
     assert "2 configurations x 2 seeds" in out and "alpha=0.1-" in out
     assert cli.main(["sweep", str(spec_file.with_name("nope.yaml"))]) == 2
-    assert "nope.yaml: cannot read" in capsys.readouterr().err
+    assert "nope.yaml: file not found" in capsys.readouterr().err
     monkeypatch.setitem(sys.modules, "ray", None)  # as if Ray were not installed
     assert cli.main(["sweep", str(spec_file), "--ray", "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err

@@ -17,7 +17,10 @@ Sections (each printed as a table row, all written to ``--out`` as JSON):
   reports its peak RSS and its Q-table's size next to the paper's dense 113.9 MiB;
 * **profile**: cProfile of the fast single-robot loop, top 10 functions by own time;
 * **agreement**: fast vs reference sensing on a sample of random poses per arena
-  (``tools/agreement.py`` runs the full 100k).
+  (``tools/agreement.py`` runs the full 100k);
+* **arena check**: validating an arena whose walls are a 5,000-point ring, and a
+  5,000-point star (random radii, so that many edges' bounding boxes overlap), as
+  ``koolio-pm check-arena`` does after parsing (``docs/robustness.md``).
 
 Every rate is given twice: per wall-clock second and per CPU second of this process
 (``time.process_time``). On an idle machine they agree; on a shared one other processes
@@ -234,6 +237,29 @@ def agreement_sample(poses: int) -> list[dict]:
     return [compare_backends(a, poses, seed=9).as_dict() for a in ("hallway", "room", "obstacles")]
 
 
+def arena_check(points: int) -> dict:
+    """Seconds to validate a ``points``-point ring and star arena (parsing excluded)."""
+    import math
+    import random
+
+    from koolio_pymunk.arena import parse_arena
+
+    rng = random.Random(1)
+    out = {"points": points}
+    for kind in ("ring", "star"):
+        radii = [1000.0 if kind == "ring" else rng.uniform(300, 1000) for _ in range(points)]
+        walls = [
+            [r * math.cos(2 * math.pi * k / points), r * math.sin(2 * math.pi * k / points)]
+            for k, r in enumerate(radii)
+        ]
+        data = {"name": kind, "walls": walls, "goals": [{"name": "g", "at": [0, 100]}],
+                "start": {"at": [0, 0]}}  # fmt: skip
+        with Timer() as t:
+            parse_arena(data, kind)
+        out[f"{kind}_s"] = round(t.wall, 3)
+    return out
+
+
 def machine() -> dict:
     return {
         "cpus": os.cpu_count(),
@@ -323,6 +349,13 @@ def main(argv: list[str] | None = None) -> int:
         print("  where the time goes (fast single-robot loop, cProfile own time):")
         for r in prof:
             print(f"    {r['share']:>6.1%} {r['calls']:>9,}  {r['function']}")
+
+        check = arena_check(5_000)
+        report["arena_check"] = check
+        print(
+            f"  check-arena, {check['points']:,}-point walls (validation only): ring "
+            f"{check['ring_s']:.2f} s, star {check['star_s']:.2f} s"
+        )
 
         agree = agreement_sample(300 if q else 2_000)
         report["agreement_sample"] = agree

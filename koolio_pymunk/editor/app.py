@@ -13,10 +13,9 @@ editor. Headless with ``SDL_VIDEODRIVER=dummy``.
 from __future__ import annotations
 
 import argparse
+import io
 import math
-import os
 import sys
-import tempfile
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path as FilePath
@@ -27,6 +26,7 @@ import pygame_gui
 from ..arena import Point
 from ..config import ROBOT_PROFILES, Config, load_config
 from ..errors import KoolioError
+from ..files import atomic_write, check_path
 from ..viewer.camera import Camera
 from . import dialogs, items, view
 from .dialogs import Prompt
@@ -152,17 +152,13 @@ class EditorApp:
     def screenshot(self, path: str | FilePath) -> None:
         """Draw and save the window as an image, atomically."""
         self.render()
-        path = FilePath(path)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
-        os.close(fd)
+        path = check_path(path, "--screenshot")
+        buf = io.BytesIO()
         try:
-            pygame.image.save(self.screen, tmp)
-            os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600 files
-            os.replace(tmp, path)
-        except BaseException:
-            if os.path.exists(tmp):
-                os.unlink(tmp)
-            raise
+            pygame.image.save(self.screen, buf, path.name or "png")
+        except pygame.error as exc:
+            raise KoolioError(f"{path}: cannot save an image: {exc}") from None
+        atomic_write(path, buf.getvalue())
 
     # =====================================================================================
     # Events
@@ -867,12 +863,6 @@ class EditorApp:
             name = f"{items.path_str(p)}[{i}]-{items.path_str(p)}[{(i + 1) % len(pts)}]"
             out += f"   {name} {view.fmt_len(math.dist(a, b), tile)}"
         return out
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
 
 
 # =========================================================================================

@@ -42,6 +42,7 @@ from pathlib import Path as FilePath
 
 from .. import geometry
 from ..arena import (
+    MAX_ARENA_BYTES,
     Arena,
     Goal,
     Marker,
@@ -54,7 +55,7 @@ from ..arena import (
     validate_arena,
 )
 from ..errors import ArenaError, KoolioError
-from ..files import atomic_write_text
+from ..files import atomic_write_text, read_text
 from ..hallway import build_hallway, load_door_table
 from . import items
 from .items import EditError, Path
@@ -126,11 +127,9 @@ def read_arena_file(path: str | FilePath) -> tuple[Arena, str]:
     """``(arena, header)`` of an arena file whose geometry may be invalid."""
     source = str(path)
     try:
-        text = FilePath(path).read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ArenaError(f"{source}: file not found") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ArenaError(f"{source}: cannot read: {exc}") from None
+        text = read_text(path, MAX_ARENA_BYTES, "arena file")
+    except KoolioError as exc:
+        raise ArenaError(str(exc)) from None
     return parse_unchecked(parse_yaml_text(text, source), source), read_header(text)
 
 

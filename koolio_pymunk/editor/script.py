@@ -57,6 +57,7 @@ from pathlib import Path as FilePath
 import pygame
 
 from ..errors import KoolioError
+from ..files import read_text
 from . import items
 from .app import EditorApp
 from .drive import ACTIONS
@@ -98,9 +99,9 @@ def run_script(app: EditorApp, path: str | FilePath) -> None:
     """Run the script file ``path`` against ``app``."""
     source = str(path)
     try:
-        text = FilePath(path).read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ScriptError(f"{source}: cannot read: {exc.strerror or exc}") from None
+        text = read_text(path, 16 * 1024 * 1024, "editor script")
+    except KoolioError as exc:
+        raise ScriptError(str(exc)) from None
     run_commands(app, parse_script(text, source), source)
 
 

@@ -47,6 +47,8 @@ IDLE_FPS = 60
 SPEED_MIN, SPEED_MAX = 1.0, 1000.0
 DEFAULT_SIZE = (1280, 800)
 MIN_SIZE = (1080, 700)
+#: Largest window (an 8K screen); a bigger one would only exhaust memory.
+MAX_SIZE = (7680, 4320)
 PANEL_W = 230
 #: Colour of the hint lines (what the control under the pointer does).
 HINT = "#ffd870"
@@ -88,6 +90,10 @@ def _size(text: str) -> tuple[int, int]:
     if w < MIN_SIZE[0] or h < MIN_SIZE[1]:
         raise argparse.ArgumentTypeError(
             f"window {w}x{h} is smaller than {MIN_SIZE[0]}x{MIN_SIZE[1]}"
+        )
+    if w > MAX_SIZE[0] or h > MAX_SIZE[1]:
+        raise argparse.ArgumentTypeError(
+            f"window {w}x{h} is larger than {MAX_SIZE[0]}x{MAX_SIZE[1]}"
         )
     return (w, h)
 
@@ -167,6 +173,8 @@ def _check_args(args: argparse.Namespace) -> tuple[int, Path] | None:
         raise KoolioError(f"--steps: must be >= 0, got {args.steps}")
     if args.screenshot is not None and not args.screenshot.lower().endswith(".png"):
         raise KoolioError(f"--screenshot: {args.screenshot}: must end in .png")
+    if args.screenshot is not None and Path(args.screenshot).is_dir():
+        raise KoolioError(f"--screenshot: {args.screenshot}: is a folder, not a file")
     if args.screenshot_every is None:
         return None
     k_text, folder = args.screenshot_every
@@ -176,7 +184,25 @@ def _check_args(args: argparse.Namespace) -> tuple[int, Path] | None:
         raise KoolioError(f"--screenshot-every: K must be an integer, got {k_text!r}") from None
     if k < 1:
         raise KoolioError(f"--screenshot-every: K must be >= 1, got {k}")
-    return k, Path(folder)
+    return k, _frames_folder(folder)
+
+
+def _frames_folder(folder: str) -> Path:
+    """``--screenshot-every``'s DIR: a new or empty-of-frames folder (frames of an earlier
+    run are never overwritten)."""
+    from ..files import check_path
+
+    path = check_path(folder, "--screenshot-every")
+    if path.exists() and not path.is_dir():
+        raise KoolioError(f"--screenshot-every: {folder}: is a file, not a folder")
+    if path.is_dir():
+        old = sorted(path.glob("frame_*.png"))
+        if old:
+            raise KoolioError(
+                f"--screenshot-every: {folder}: holds frames of an earlier run "
+                f"({old[0].name}, ...): give a new or empty folder"
+            )
+    return path
 
 
 def run(args: argparse.Namespace) -> int:
@@ -853,9 +879,15 @@ class ViewerApp:
         return self.headless and self.session.done
 
     def run(self) -> None:
-        """The window loop; returns when :meth:`finished`."""
-        while not self.finished():
-            self.frame()
+        """The window loop; returns when :meth:`finished`. Ctrl-C in the terminal takes
+        effect between frames (never between a save and its log row): the unfinished
+        episode is then folded in, or discarded with ``--discard-unfinished``."""
+        from ..training import SafeInterrupt
+
+        with SafeInterrupt() as guard:
+            while not self.finished():
+                guard.check()
+                self.frame()
 
     def finish(self) -> None:
         """After the loop: leave as closing the window would (unless Exit already did)."""
@@ -1002,7 +1034,6 @@ class ViewerApp:
         from ..files import atomic_write
 
         path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
         image = self.screen
         if self.panel_window is not None:
             panel = self.panel_image()

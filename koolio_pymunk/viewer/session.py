@@ -24,23 +24,24 @@ the end of the world).
 
 from __future__ import annotations
 
-import csv
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from ..arena import arena_record
 from ..env import KoolioEnv
+from ..episode_log import LogWriter, log_rows
 from ..errors import KoolioError, located
 from ..learner import QLearner
-from ..qtable import QTable, QTableStore, check_compatible, load_qtable
+from ..qtable import QTableStore, check_compatible, load_qtable
 from ..training import (
     EVAL_STREAM,
     TRAIN_STREAM,
     EpisodeResult,
-    LogWriter,
     episode_seeds,
+    open_run,
     sensor_signature,
 )
 
@@ -81,7 +82,8 @@ class Stats:
 def read_returns(path: str | Path) -> list[float]:
     """Returns of the finished episodes of a training log (``interrupted`` rows skipped).
 
-    A missing or empty file gives ``[]``; a malformed one raises :class:`KoolioError`.
+    A missing or empty file gives ``[]``; a malformed one (or not a log at all: a binary
+    file, an arena) raises :class:`KoolioError`.
     """
     return read_history(path)[0]
 
@@ -89,21 +91,21 @@ def read_returns(path: str | Path) -> list[float]:
 def read_history(path: str | Path) -> tuple[list[float], list[bool]]:
     """Return of each finished episode of a training log, and whether it ended at the goal
     (``interrupted`` rows skipped). A missing or empty file gives ``([], [])``; a
-    malformed one raises :class:`KoolioError`."""
-    p = Path(path)
-    if not p.exists() or p.stat().st_size == 0:
-        return [], []
+    malformed one (or not a log at all: a binary file, an arena) raises
+    :class:`KoolioError`."""
     out: list[float] = []
     goal: list[bool] = []
-    with p.open(newline="", encoding="utf-8") as fh:
-        for line, row in enumerate(csv.DictReader(fh), start=2):
-            if row.get("outcome") == "interrupted":
-                continue
-            try:
-                out.append(float(row["reward"]))
-            except (KeyError, TypeError, ValueError):
-                raise KoolioError(located(str(p), f"line {line}", "reward: not a number")) from None
-            goal.append(row.get("outcome") == "goal")
+    for line, row in enumerate(log_rows(path), start=2):
+        if row.get("outcome") == "interrupted":
+            continue
+        try:
+            value = float(row["reward"])
+        except (KeyError, TypeError, ValueError):
+            value = math.nan
+        if not math.isfinite(value):
+            raise KoolioError(located(str(path), f"line {line}", "reward: not a number"))
+        out.append(value)
+        goal.append(row.get("outcome") == "goal")
     return out, goal
 
 
@@ -131,19 +133,19 @@ class Session:
         """The Q-table file (written while learning, only read with ``greedy``)."""
         cfg = env.config
         self.store: QTableStore | None = None
-        if self.learn:
-            self.store = QTableStore(qtable)
-            self.table: QTable = self.store.open(
-                env.layout, sensor_signature(cfg), cfg.learner.q_init
-            )
+        if self.learn:  # the table and the log locked while the window learns
+            self.store = QTableStore(qtable, purpose="koolio-pm view")
+            self.table, self.log = open_run(env, self.store, log, "koolio-pm view")
             self.first = int(self.table.meta.get("episodes", 0))
         else:
             if not Path(qtable).exists():
                 raise KoolioError(located(str(qtable), "", "no such Q-table file (--greedy)"))
             self.table = load_qtable(qtable)
-            check_compatible(self.table, env.layout, sensor_signature(cfg), str(qtable))
+            check_compatible(
+                self.table, env.layout, sensor_signature(cfg), str(qtable), arena_record(env.arena)
+            )
             self.first = 0
-        self.log = LogWriter(log if self.learn else None)
+            self.log = LogWriter(None)
         self.stats = Stats()
         if self.learn and log:
             self.stats.returns, self.stats.at_goal = read_history(log)
@@ -262,4 +264,6 @@ class Session:
             self.log.write(res)
             self.results.append(res)
         self.log.close()
+        if self.store is not None:
+            self.store.close()
         return res
