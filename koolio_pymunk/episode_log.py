@@ -11,10 +11,11 @@ the unfinished episode was folded into the table; its number is run again when t
 resumes). With domain randomization the draw of each episode follows in extra columns
 named ``realism.<section>.<name>`` (:mod:`koolio_pymunk.realism`).
 
-**Which files may be a log.** A log that exists must start with that header line (and
-a run appending to it must write the same extra columns): any other file (an arena, a Q-table, a binary file) is refused with a one-line error and left
-untouched, and the log must not be the Q-table, its backup or a lock file. While a run
-writes a log it holds the log's lock (:mod:`koolio_pymunk.locks`).
+**Which files may be a log.** A log that exists must start with that header line (and a
+run appending to it must write the same extra columns): any other file (an arena, a
+Q-table, a binary file) is refused with a one-line error and left untouched, and the log
+must not be the Q-table, its backup or a lock file. While a run writes a log it holds
+the log's lock (:mod:`koolio_pymunk.locks`).
 
 **Agreement with the table.** The table is saved before an episode's row is written, so
 the log and the table can disagree after a stop:

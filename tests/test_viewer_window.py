@@ -33,9 +33,13 @@ def config(tmp_path):
     return path
 
 
-def make_app(tmp_path, config, arena: str = "room", **kw) -> ViewerApp:
+def make_app(
+    tmp_path, config, arena: str = "room", files: tuple[str, str] = ("q.qtable", "log.csv"), **kw
+) -> ViewerApp:
+    """A paused window learning into ``files`` (table, log) in ``tmp_path``; one learning
+    window per table, which is locked while the window learns."""
     env = KoolioEnv(arena, config=config)
-    session = Session(env, tmp_path / "q.qtable", seed=1, log=tmp_path / "log.csv")
+    session = Session(env, tmp_path / files[0], seed=1, log=tmp_path / files[1])
     kw.setdefault("running", False)
     app = ViewerApp(session, draw_fps=1e9, **kw)  # every frame redraws (and updates hover)
     pygame.event.clear()
@@ -155,7 +159,7 @@ def test_pointing_at_a_control_shows_its_hint_below_the_buttons(tmp_path, config
 # -- text --------------------------------------------------------------------------------------
 def test_text_scales_with_the_window_and_has_the_degree_sign(tmp_path, config) -> None:
     small = make_app(tmp_path, config)
-    big = make_app(tmp_path, config, size=(1920, 1080))
+    big = make_app(tmp_path, config, files=("big.qtable", "big.csv"), size=(1920, 1080))
     assert (small.style.ui, big.style.ui) == (1.0, 1.35)
     assert big.b_run.rect.h == 40 and small.b_run.rect.h == 30
     assert hud.text("Sonar1-2", big.style.row).get_height() > hud.text("Sonar1-2", 14).get_height()
