@@ -2,8 +2,9 @@
 
 Every command prints a one-line ``koolio-pm: error: ...`` and exits with status 2 on bad
 input (a malformed arena, a corrupt or mismatched Q-table, a wrong flag), never a
-traceback. Commands that need drawing (``view``, ``plot``) import pygame / matplotlib
-only when they run.
+traceback. Commands that need drawing (``view``, ``plot``, ``edit``) import pygame /
+matplotlib only when they run; without the ``view`` extra they say which extra to install
+(:mod:`koolio_pymunk.extras`) and exit 2.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import sys
 from collections.abc import Sequence
 from typing import NoReturn
 
+from . import __version__
 from .errors import KoolioError
 
 DEFAULT_QTABLE = "runs/hallway.qtable"
@@ -75,6 +77,7 @@ def build_parser() -> argparse.ArgumentParser:
         prog="koolio-pm",
         description="Koolio, the FCRAR 2008 delivery robot, learning by Q-learning on pymunk.",
     )
+    parser.add_argument("--version", action="version", version=f"koolio-pm {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     p = sub.add_parser("train", help="headless episodic Q-learning")
@@ -137,6 +140,7 @@ EXTRA_COMMANDS: dict[str, str] = {
     "plot": "koolio_pymunk.plotting",
     "export": "koolio_pymunk.export",
     "sweep": "koolio_pymunk.sweep",
+    "edit": "koolio_pymunk.editor.command",
 }
 
 
@@ -148,6 +152,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(COMMANDS[args.command](args) or 0)
     except KoolioError as exc:
         print(f"koolio-pm: error: {exc}", file=sys.stderr)
+        return 2
+    except ModuleNotFoundError as exc:  # pygame / matplotlib without the [view] extra
+        from .extras import missing_extra
+
+        missing = missing_extra(exc, args.command)
+        if missing is None:
+            raise
+        print(f"koolio-pm: error: {missing}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("koolio-pm: interrupted", file=sys.stderr)

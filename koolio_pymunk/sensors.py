@@ -50,9 +50,12 @@ import numpy as np
 from .arena import Point
 from .config import SensorConfig
 from .errors import ConfigError
-from .raycast import make_engine, new_trig, sense_one
-from .readout import compass_code, readout
 from .world import World
+
+# The compiled kernels (raycast.py, readout.py) import numba, which takes a large part of
+# a second to load: they are imported when a SensorSuite is made, not with this module, so
+# `import koolio_pymunk` and the commands that need no sensing (info, check-arena, export,
+# plot) stay light.
 
 #: Codes of the sonar intervals (Table 6) and camera intervals (Table 7).
 SONAR_LEVELS = ("Bump", "Close", "Medium", "Far")
@@ -139,6 +142,8 @@ class SensorSuite:
                 f"sensors.backend: the cone sonar model needs sonar_arc_deg < 180, "
                 f"got {so.sonar_arc_deg:g}"
             )
+        from .raycast import make_engine
+
         self.engine = make_engine(self.backend, world)
         self._kernel = KernelInputs(self)
         self._last: tuple[Readings, tuple[int, ...]] | None = None
@@ -318,6 +323,11 @@ class KernelInputs:
         self.eow_k = np.empty(s.n_camera, np.int64)
         self.out = np.empty(self.n_raw)
         self.codes = np.empty(len(self.bits), np.int64)
+        from .raycast import new_trig, sense_one
+        from .readout import readout
+
+        self._sense_one = sense_one
+        self._readout = readout
         self.trig = new_trig(self.ray_offsets.size)
         self.pose = (0.0, 0.0, 0.0)
 
@@ -331,7 +341,7 @@ class KernelInputs:
     def sense(
         self, x: float, y: float, h: float, raw: np.ndarray, rays: np.ndarray, eow_k: np.ndarray
     ) -> None:
-        sense_one(
+        self._sense_one(
             float(x),
             float(y),
             float(h),
@@ -357,7 +367,7 @@ class KernelInputs:
             draws = rng.standard_normal(self.n_raw)
         else:
             draws = rng.uniform(-1.0, 1.0, self.n_raw)  # as draw_noise, one call less
-        return readout(
+        return self._readout(
             self.raw,
             draws,
             self.fracs,
@@ -387,6 +397,18 @@ class KernelInputs:
             eow_target=self.eow_k.tolist(),
         )
         return r, tuple(int(c) for c in self.codes)
+
+
+def compass_code(compass: float) -> int:
+    """The compass field's code (East, North, West, South) of a reading in 0..256 units:
+    the compiled kernel's own function (:func:`koolio_pymunk.readout.compass_code`).
+
+    >>> [compass_code(c) for c in (0.0, 64.0, 128.0, 192.0)]
+    [0, 1, 2, 3]
+    """
+    from .readout import compass_code as kernel
+
+    return int(kernel(compass))
 
 
 def sonar_ray_offsets(angles_deg: Sequence[float], arc_deg: float, sub_arcs: int) -> np.ndarray:
