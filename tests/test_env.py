@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 
 import gymnasium as gym
 import numpy as np
@@ -28,6 +29,11 @@ def quiet_config(**episode) -> Config:
 def test_check_env_passes() -> None:
     env = KoolioEnv("room")
     check_env(env, skip_render_check=True)
+
+
+def test_check_env_of_the_registered_env_with_its_render_modes() -> None:
+    os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+    check_env(gym.make("koolio_pymunk/Hallway-v0").unwrapped)  # rebuilds it per render mode
 
 
 def test_gym_make_registered_hallway() -> None:
