@@ -17,7 +17,6 @@ from pathlib import Path
 
 import pytest
 
-from koolio_pymunk import cli
 from koolio_pymunk.extras import VIEW_INSTALL, missing_extra
 
 #: Installed first in the subprocess: the [view] extra's modules are "not installed".
@@ -52,16 +51,6 @@ def koolio_pm_without_view(args: list[str], cwd: Path) -> subprocess.CompletedPr
     return without_view(f"from koolio_pymunk.cli import main; sys.exit(main({args!r}))", cwd)
 
 
-@pytest.fixture(scope="module")
-def tiny_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    folder = tmp_path_factory.mktemp("log")
-    (folder / "tiny.yaml").write_text("episode: {max_steps: 30}\n")
-    args = ["train", "--arena", "room", "--episodes", "2", "--quiet", "--config"]
-    args += [str(folder / "tiny.yaml"), "--qtable", str(folder / "q.qtable")]
-    assert cli.main([*args, "--log", str(folder / "log.csv")]) == 0
-    return folder / "log.csv"
-
-
 def test_the_subprocess_really_lacks_the_extra(tmp_path: Path) -> None:
     p = without_view("import pygame", tmp_path)
     assert p.returncode == 1 and "ModuleNotFoundError: No module named 'pygame'" in p.stderr
@@ -76,9 +65,9 @@ def test_the_subprocess_really_lacks_the_extra(tmp_path: Path) -> None:
     ],
 )
 def test_drawing_commands_name_the_extra_and_exit_2(
-    command: list[str], needs: str, tiny_log: Path, tmp_path: Path
+    command: list[str], needs: str, tiny_run: Path, tmp_path: Path
 ) -> None:
-    args = [str(tiny_log) if a == "LOG" else a for a in command]
+    args = [str(tiny_run / "log.csv") if a == "LOG" else a for a in command]
     p = koolio_pm_without_view(args, tmp_path)
     assert p.returncode == 2, p.stderr
     assert p.stderr == f"koolio-pm: error: {command[0]}: {needs} is not installed: {VIEW_INSTALL}\n"

@@ -11,7 +11,6 @@ from pathlib import Path
 import pytest
 
 import koolio_pymunk
-from koolio_pymunk import cli
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -43,16 +42,6 @@ def test_package_metadata_files() -> None:
     assert [e.value for e in scripts] == ["koolio_pymunk.cli:main"]
 
 
-@pytest.fixture(scope="module")
-def trained(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    folder = tmp_path_factory.mktemp("trained")
-    (folder / "tiny.yaml").write_text("episode: {max_steps: 30}\n")
-    args = ["train", "--arena", "room", "--episodes", "2", "--quiet", "--config"]
-    args += [str(folder / "tiny.yaml"), "--qtable", str(folder / "q.qtable")]
-    assert cli.main([*args, "--log", str(folder / "log.csv")]) == 0
-    return folder
-
-
 LOADS_NUMBA = "import sys; print('numba' in sys.modules, 'pygame' in sys.modules)"
 
 
@@ -66,7 +55,7 @@ LOADS_NUMBA = "import sys; print('numba' in sys.modules, 'pygame' in sys.modules
         ["plot", "--log", "log.csv", "--out", "curve.png"],
     ],
 )
-def test_commands_without_sensing_do_not_load_numba(command: list[str], trained: Path) -> None:
+def test_commands_without_sensing_do_not_load_numba(command: list[str], tiny_run: Path) -> None:
     code = (
         "import contextlib, io\nfrom koolio_pymunk.cli import main\n"
         "with contextlib.redirect_stdout(io.StringIO()):\n"
@@ -76,7 +65,7 @@ def test_commands_without_sensing_do_not_load_numba(command: list[str], trained:
         "        rc = exc.code\n"
         f"print(rc)\n{LOADS_NUMBA}"
     )
-    p = run_python("-c", code, cwd=trained)
+    p = run_python("-c", code, cwd=tiny_run)
     assert p.stdout.split() == ["0", "False", "False"], p.stderr
 
 
