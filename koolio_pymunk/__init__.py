@@ -1,25 +1,44 @@
 """koolio-pymunk: the Koolio delivery robot (FCRAR 2008) on pymunk, learning by Q-learning.
 
-Importing the package registers ``koolio_pymunk/Hallway-v0`` (the paper's hallway) with
-Gymnasium::
+Importing the package registers ``koolio_pymunk/Hallway-v0`` (the paper's hallway, with
+Gymnasium's ``TimeLimit`` at the default 1500-step cap) with Gymnasium::
 
     import gymnasium as gym
     import koolio_pymunk
 
     env = gym.make("koolio_pymunk/Hallway-v0")
+
+The import is light: :class:`KoolioEnv` (and with it pymunk and the numba-compiled
+sensing kernels) is loaded on first use, so the command line's ``--help``, ``info``,
+``check-arena``, ``export`` and ``plot`` start without compiling anything.
 """
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any
+
 import gymnasium as gym
 
-from .env import KoolioEnv
+if TYPE_CHECKING:
+    from .env import KoolioEnv
 
-__all__ = ["KoolioEnv"]
+__all__ = ["KoolioEnv", "__version__"]
 __version__ = "0.1.0"
 
 gym.register(
     id="koolio_pymunk/Hallway-v0",
     entry_point="koolio_pymunk.env:KoolioEnv",
     kwargs={"arena": "hallway"},
+    # The default ``episode.max_steps`` (tests/test_env.py checks they agree); see the
+    # KoolioEnv docstring for how the env's own cap and TimeLimit relate.
+    max_episode_steps=1500,
 )
+
+
+def __getattr__(name: str) -> Any:
+    """``koolio_pymunk.KoolioEnv`` imports :mod:`koolio_pymunk.env` on first use."""
+    if name == "KoolioEnv":
+        from .env import KoolioEnv
+
+        return KoolioEnv
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -3,8 +3,9 @@
 Every command prints a one-line ``koolio-pm: error: ...`` and exits with status 2 on bad
 input (a malformed arena, a corrupt or mismatched Q-table, a wrong flag, a file that
 cannot be read or written), never a traceback, and leaves existing files as they were.
-Commands that need drawing (``view``, ``plot``) import pygame / matplotlib only when they
-run.
+Commands that need drawing (``view``, ``plot``, ``edit``) import pygame / matplotlib only
+when they run; without the ``view`` extra they say which extra to install
+(:mod:`koolio_pymunk.extras`) and exit 2.
 
 Files: the Q-table and the log default to ``runs/<arena>.qtable`` and ``runs/<arena>.csv``
 (``<arena>``: the built-in name, or the arena file's stem), so runs in different arenas
@@ -22,6 +23,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import NoReturn
 
+from . import __version__
 from .errors import KoolioError, located
 
 DEFAULT_QTABLE = "runs/hallway.qtable"
@@ -125,6 +127,7 @@ def build_parser() -> argparse.ArgumentParser:
         prog="koolio-pm",
         description="Koolio, the FCRAR 2008 delivery robot, learning by Q-learning on pymunk.",
     )
+    parser.add_argument("--version", action="version", version=f"koolio-pm {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     p = sub.add_parser("train", help="headless episodic Q-learning")
@@ -188,6 +191,7 @@ EXTRA_COMMANDS: dict[str, str] = {
     "plot": "koolio_pymunk.plotting",
     "export": "koolio_pymunk.export",
     "sweep": "koolio_pymunk.sweep",
+    "edit": "koolio_pymunk.editor.command",
 }
 
 
@@ -201,6 +205,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(COMMANDS[args.command](args) or 0)
     except KoolioError as exc:
         print(f"koolio-pm: error: {one_line(str(exc))}", file=sys.stderr)
+        return 2
+    except ModuleNotFoundError as exc:  # pygame / matplotlib without the [view] extra
+        from .extras import missing_extra
+
+        missing = missing_extra(exc, args.command)
+        if missing is None:
+            raise
+        print(f"koolio-pm: error: {missing}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # e.g. `koolio-pm info | head -1`: the reader left, not an error
         # Python's documented recipe: point stdout at devnull so the exit flush is quiet.

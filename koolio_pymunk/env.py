@@ -26,6 +26,11 @@ from .world import ACTION_NAMES, Action, World
 #: believes it delivered (the goal reward, the episode ends) at another door.
 WRONG_DOOR = "wrong_door"
 
+NO_KEYWORD = -1
+"""``info["keyword"]`` after ``reset``: no action taken yet (keywords are >= 0)."""
+RESET_EVENT = "reset"
+"""``info["event"]`` after ``reset``: no reward rule judged yet."""
+
 
 class EndZones:
     """End-of-world zones: polygons, or discs of one robot diameter around a marker."""
@@ -80,11 +85,22 @@ class KoolioEnv(gym.Env):
     reverse / turn / forward by action. ``info["reward_terms"]`` names them.
 
     **Episode end.** ``terminated`` at the goal or in an end-of-world zone; ``truncated``
-    after ``episode.max_steps`` steps. With the misread-plate model on, a Stop whose
-    front camera reads another door's plate as the goal Close gets the goal reward and
-    ends the episode as the robot would, but its event is ``wrong_door``, not ``goal``.
-    Each episode starts at the arena's start point with a uniformly random heading
-    unless the arena fixes it (exploring starts).
+    after ``episode.max_steps`` steps (1500 by default; 0: no cap). With the misread-plate
+    model on, a Stop whose front camera reads another door's plate as the goal Close gets
+    the goal reward and ends the episode as the robot would, but its event is
+    ``wrong_door``, not ``goal``. Each episode starts at the arena's start point with a
+    uniformly random heading unless the arena fixes it (exploring starts).
+
+    **Step cap and** ``TimeLimit``. The cap belongs to the simulator's configuration:
+    ``koolio-pm train``, ``eval`` and ``view`` drive the class directly, without
+    wrappers, and their logs record the truncations. The registered
+    ``koolio_pymunk/Hallway-v0`` also declares it, as Gymnasium does, with
+    ``max_episode_steps=1500``: ``gym.make`` wraps the env in ``TimeLimit`` and
+    ``env.spec.max_episode_steps`` is 1500. Both caps then count the same steps and by
+    default end the episode on the same step, with the same ``truncated``; when they
+    differ the smaller one wins. ``gym.make(id, max_steps=N)`` lowers the env's own cap
+    only; for longer episodes raise both (``max_steps=N, max_episode_steps=N``), or pass
+    ``max_steps=0`` and let ``max_episode_steps`` alone decide.
 
     **Rescue.** With ``rescue.auto_rescue_toggle`` on, a bumping robot past
     ``max_steps_before_rescue`` steps is rescued with probability ``rescue_chance``
@@ -93,10 +109,20 @@ class KoolioEnv(gym.Env):
     observation returned is the one after the rescue and the step's reward stays the Bump
     reward. :meth:`rescue` forces one.
 
-    **info**: ``pose`` (x, y, heading radians), ``sonar`` / ``goal_cam`` / ``eow_cam``
-    (noised distances, inches), ``compass``, ``state_key``, ``keyword`` (Table 12 keyword
-    of the previous state and this action: the Q entry the step updates), ``event``,
-    ``rescued``, ``has_been_rescued``, ``reward_terms``, ``steps``, ``bumps``, ``goal``.
+    **info** (the same keys, each with one type, after ``reset`` and after every step, so
+    vector envs can stack them through staggered autoresets): ``pose`` (tuple of 3 floats:
+    x, y, heading radians), ``sonar`` / ``goal_cam`` / ``eow_cam`` (lists of floats: noised
+    distances, inches), ``compass`` (float), ``state_key`` (int), ``keyword`` (int: Table
+    12 keyword of the previous state and this action, the Q entry the step updates; -1
+    after ``reset``), ``event`` (str: the winning reward rule; ``"reset"`` after
+    ``reset``), ``rescued`` and ``has_been_rescued`` (bool), ``reward_terms`` (dict of the
+    seven named terms, floats; all 0.0 after ``reset``), ``steps`` and ``bumps`` (int),
+    ``goal`` (str: the active goal's name).
+
+    **Rendering.** ``render_mode`` is ``None``, ``"human"`` (a window) or ``"rgb_array"``
+    (the window's picture as an array); any other value is refused with ``ValueError``.
+    Drawing needs the ``[view]`` extra (pygame-ce); without it :meth:`render` raises
+    Gymnasium's ``DependencyNotInstalled`` naming the extra to install.
 
     **World.** ``world`` (a profile name such as ``koolio-real``, or a file) lays the
     realism models and sensor noise of a world over the configuration
@@ -123,6 +149,9 @@ class KoolioEnv(gym.Env):
         max_steps: int | None = None,
         world: str | Path | None = None,
     ) -> None:
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            modes = ", ".join(repr(m) for m in self.metadata["render_modes"])
+            raise ValueError(f"render_mode: {render_mode!r} is not one of None, {modes}")
         # A configuration passed in is copied, never changed (``max_steps``, ``world``).
         cfg = copy.deepcopy(config) if isinstance(config, Config) else load_config(config)
         if world is not None:
@@ -189,7 +218,10 @@ class KoolioEnv(gym.Env):
             gym.logger.warn("render() called without a render_mode")
             return None
         if self._renderer is None:
-            from .viewer.render import EnvRenderer  # pygame only when drawing
+            from .extras import view_extra
+
+            with view_extra("render"):
+                from .viewer.render import EnvRenderer  # pygame only when drawing
 
             self._renderer = EnvRenderer(self)
         return self._renderer.render(self.render_mode)
@@ -342,8 +374,8 @@ class KoolioEnv(gym.Env):
             "eow_cam": r.eow.tolist(),
             "compass": r.compass,
             "state_key": self.state_key,
-            "keyword": self.keyword,
-            "event": None if j is None else j.event,
+            "keyword": NO_KEYWORD if self.keyword is None else self.keyword,
+            "event": RESET_EVENT if j is None else j.event,
             "rescued": self.rescued,
             "has_been_rescued": self.has_been_rescued,
             "reward_terms": dict(j.terms) if j is not None else dict.fromkeys(TERMS, 0.0),

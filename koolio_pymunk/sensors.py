@@ -55,11 +55,13 @@ import numpy as np
 from .arena import Point
 from .config import SensorConfig
 from .errors import ConfigError
-from .raycast import make_engine, new_trig, sense_one
-from .readout import compass_code, readout, wrap_compass
 from .realism import RealismConfig, SensorRealism, apply_reference
-from .realism_kernel import sense_realism
 from .world import World
+
+# The compiled kernels (raycast.py, readout.py) import numba, which takes a large part of
+# a second to load: they are imported when a SensorSuite is made, not with this module, so
+# `import koolio_pymunk` and the commands that need no sensing (info, check-arena, export,
+# plot) stay light.
 
 #: Codes of the sonar intervals (Table 6) and camera intervals (Table 7).
 SONAR_LEVELS = ("Bump", "Close", "Medium", "Far")
@@ -157,7 +159,11 @@ class SensorSuite:
                 f"sensors.backend: the cone sonar model needs sonar_arc_deg < 180, "
                 f"got {so.sonar_arc_deg:g}"
             )
+        from .raycast import make_engine
+        from .readout import wrap_compass
+
         self.engine = make_engine(self.backend, world)
+        self._wrap_compass = wrap_compass
         self.plates = [(float(p[0]), float(p[1])) for p in plates]
         """The other doors' plates (a misread camera may take one for the goal)."""
         self.realism = SensorRealism(
@@ -217,7 +223,7 @@ class SensorSuite:
             sonar=noised[:n],
             goal=goal_n,
             eow=eow_n,
-            compass=wrap_compass(noised[-1]),
+            compass=self._wrap_compass(noised[-1]),
             rays=rays,
             eow_target=eow_targets,
             echo=self.echoes(rays) if real is None else real.echo,
@@ -449,6 +455,13 @@ class KernelInputs:
         self.eow_k = np.empty(s.n_camera, np.int64)
         self.out = np.empty(self.n_raw)
         self.codes = np.empty(len(self.bits), np.int64)
+        from .raycast import new_trig, sense_one
+        from .readout import readout
+        from .realism_kernel import sense_realism
+
+        self._sense_one = sense_one
+        self._readout = readout
+        self._sense_realism_kernel = sense_realism
         self.trig = new_trig(self.ray_offsets.size)
         self.pose = (0.0, 0.0, 0.0)
         # Realism: inputs and what the models report of the last reading.
@@ -498,7 +511,7 @@ class KernelInputs:
         ray_cos: np.ndarray | None = None,
         decoy: np.ndarray | None = None,
     ) -> None:
-        sense_one(
+        self._sense_one(
             float(x),
             float(y),
             float(h),
@@ -529,7 +542,7 @@ class KernelInputs:
             draws = rng.standard_normal(self.n_raw)
         else:
             draws = rng.uniform(-1.0, 1.0, self.n_raw)  # as draw_noise, one call less
-        return readout(
+        return self._readout(
             self.raw,
             draws,
             self.fracs,
@@ -558,8 +571,10 @@ class KernelInputs:
             u = rng.random(n_draws)
         else:
             u = rng.random(self.n_raw + n_draws)
-        return sense_realism(float(x), float(y), float(h), *self._geometry_args, self.noise,
-                             u, not self.gaussian, *self._realism_args)  # fmt: skip
+        return self._sense_realism_kernel(
+            float(x), float(y), float(h), *self._geometry_args, self.noise, u,
+            not self.gaussian, *self._realism_args,
+        )  # fmt: skip
 
     def last_readings(self) -> tuple[Readings, tuple[int, ...]]:
         """:class:`Readings` and codes of the last :meth:`sense_readout` (copies)."""
@@ -579,6 +594,18 @@ class KernelInputs:
             misread=self.misread.copy() if real else np.zeros(m, np.bool_),
         )
         return r, tuple(int(c) for c in self.codes)
+
+
+def compass_code(compass: float) -> int:
+    """The compass field's code (East, North, West, South) of a reading in 0..256 units:
+    the compiled kernel's own function (:func:`koolio_pymunk.readout.compass_code`).
+
+    >>> [compass_code(c) for c in (0.0, 64.0, 128.0, 192.0)]
+    [0, 1, 2, 3]
+    """
+    from .readout import compass_code as kernel
+
+    return int(kernel(compass))
 
 
 def sonar_ray_offsets(angles_deg: Sequence[float], arc_deg: float, sub_arcs: int) -> np.ndarray:

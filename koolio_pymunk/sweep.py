@@ -714,7 +714,7 @@ def _run_locked(
     rows = {t["run_id"]: results.rows[t["run_id"]] for t in tasks if t["run_id"] in results.rows}
     _write_configs(out / "configs.csv", tasks, rows)
     if plot and rows:
-        plot_curves(out, tasks, rows, spec.name)
+        _plot_or_note(out, tasks, rows, spec.name, say)
     seconds = time.perf_counter() - started
     say(f"sweep {spec.name}: {len(todo) - len(failed)} runs in {seconds:.1f} s -> {out}")
     return SweepOutcome(rows, len(todo), skipped, failed, interrupted, seconds, out)
@@ -991,6 +991,24 @@ def print_summary(rows: dict[str, dict[str, str]], tasks: list[dict[str, Any]]) 
             f"  {e['label'][:40]:<40} {e['seeds']:>5} {rate:>15} {comp:>12} "
             f"{e['final_mean_steps_mean']:>7.1f} {e['final_mean_bumps_mean']:>6.1f}"
         )
+
+
+def _plot_or_note(
+    out: Path,
+    tasks: list[dict[str, Any]],
+    rows: dict[str, Any],
+    title: str,
+    say: Callable[[str], None],
+) -> None:
+    """:func:`plot_curves`, or a note naming the extra when matplotlib is not installed:
+    the runs are done and saved, a missing plot is no reason to fail the sweep."""
+    from .extras import MissingExtra, view_extra
+
+    try:
+        with view_extra("sweep: curves.png"):
+            plot_curves(out, tasks, rows, title)
+    except MissingExtra as exc:
+        say(f"note: {exc}; curves.png skipped")
 
 
 def _rolling_goal_rate(log: Path, window: int) -> list[float]:

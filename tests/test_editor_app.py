@@ -340,8 +340,7 @@ def test_command_line_script_and_screenshot(tmp_path: Path) -> None:
     )  # fmt: skip
     assert result.returncode == 2
     assert (
-        result.stderr
-        == f"arena_editor: error: {script}:2: move_vertex: expected 3 arguments, got 4\n"
+        result.stderr == f"koolio-pm: error: {script}:2: move_vertex: expected 3 arguments, got 4\n"
     )
 
 

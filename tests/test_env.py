@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 
 import gymnasium as gym
 import numpy as np
@@ -28,6 +29,11 @@ def quiet_config(**episode) -> Config:
 def test_check_env_passes() -> None:
     env = KoolioEnv("room")
     check_env(env, skip_render_check=True)
+
+
+def test_check_env_of_the_registered_env_with_its_render_modes() -> None:
+    os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+    check_env(gym.make("koolio_pymunk/Hallway-v0").unwrapped)  # rebuilds it per render mode
 
 
 def test_gym_make_registered_hallway() -> None:
@@ -238,3 +244,77 @@ def test_config_passed_in_is_not_changed() -> None:
     assert env.config.episode.max_steps == 10
     assert cfg.episode.max_steps == Config().episode.max_steps
     assert env.config is not cfg
+
+
+def _types(value: object) -> object:
+    """The type of an info value, with the types of a container's items."""
+    if isinstance(value, dict):
+        return ("dict", tuple(sorted((k, _types(v)) for k, v in value.items())))
+    if isinstance(value, (list, tuple)):
+        return (type(value).__name__, tuple(sorted({type(v).__name__ for v in value})))
+    return type(value).__name__
+
+
+def test_every_info_key_keeps_one_type_through_resets_steps_rescues_and_ends() -> None:
+    cfg = Config()
+    cfg.episode.max_steps = 25
+    cfg.rescue.max_steps_before_rescue = 0
+    cfg.rescue.rescue_chance = 0.5
+    env = KoolioEnv("hallway", config=cfg, goal="random")
+    _, first = env.reset(seed=4)
+    assert first["keyword"] == -1 and first["event"] == "reset"
+    assert set(first["reward_terms"].values()) == {0.0}
+    seen = {k: {_types(v)} for k, v in first.items()}
+    rng = np.random.default_rng(1)
+    ends, rescues = set(), 0
+    for _ in range(300):
+        _, _, te, tr, info = env.step(int(rng.integers(5)))
+        assert info.keys() == first.keys()
+        for k, v in info.items():
+            seen[k].add(_types(v))
+        rescues += info["rescued"]
+        if te or tr:
+            ends.add("truncated" if tr else info["event"])
+            _, info = env.reset()
+            for k, v in info.items():
+                seen[k].add(_types(v))
+    assert rescues > 0 and "truncated" in ends  # the run went through both
+    assert {k: len(v) for k, v in seen.items() if len(v) != 1} == {}
+    assert seen["keyword"] == {"int"} and seen["event"] == {"str"}
+    assert seen["pose"] == {("tuple", ("float",))}
+
+
+def test_unknown_render_mode_is_refused() -> None:
+    with pytest.raises(ValueError, match=r"render_mode: 'bogus' is not one of None, 'human'"):
+        KoolioEnv("room", render_mode="bogus")
+    with pytest.warns(UserWarning, match="bogus"), pytest.raises(ValueError, match="bogus"):
+        gym.make("koolio_pymunk/Hallway-v0", render_mode="bogus")  # Gymnasium warns, we refuse
+
+
+def test_registered_env_declares_the_step_cap_for_time_limit() -> None:
+    """Gymnasium's convention: the registration's max_episode_steps and TimeLimit; the
+    env's own cap (the configuration's, used without wrappers) agrees with it."""
+    env = gym.make("koolio_pymunk/Hallway-v0")
+    assert env.spec.max_episode_steps == Config().episode.max_steps == 1500
+    assert env.unwrapped.config.episode.max_steps == 1500
+    wrappers, inner = [], env
+    while inner is not inner.unwrapped:
+        wrappers.append(type(inner).__name__)
+        inner = inner.env
+    assert "TimeLimit" in wrappers
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "cap"),
+    [
+        ({"max_episode_steps": 4}, 4),
+        ({"max_steps": 3}, 3),
+        ({"max_steps": 0, "max_episode_steps": 5}, 5),
+    ],
+)
+def test_the_smaller_cap_truncates(kwargs: dict, cap: int) -> None:
+    env = gym.make("koolio_pymunk/Hallway-v0", **kwargs)
+    env.reset(seed=0)
+    flags = [env.step(int(Action.ROTATE_LEFT))[2:4] for _ in range(cap)]
+    assert flags == [(False, False)] * (cap - 1) + [(False, True)]
+    env.close()

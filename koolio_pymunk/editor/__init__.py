@@ -1,4 +1,4 @@
-"""The arena editor (``tools/arena_editor.py``): edit arena files in a pygame-ce window.
+"""The arena editor (``koolio-pm edit``): edit arena files in a pygame-ce window.
 
 The editing model is apart from pygame so that it can be used and tested alone:
 
@@ -12,5 +12,7 @@ The editing model is apart from pygame so that it can be used and tested alone:
 * :mod:`~koolio_pymunk.editor.script` -- scripted sessions (editor actions and posted
   events, one per line);
 * :mod:`~koolio_pymunk.editor.view` and :mod:`~koolio_pymunk.editor.app` -- drawing and
-  the window (pygame imported there only).
+  the window (pygame imported there only);
+* :mod:`~koolio_pymunk.editor.command` -- the ``koolio-pm edit`` command's flags, free of
+  pygame (``tools/arena_editor.py`` runs the same command from a checkout).
 """

@@ -1,8 +1,9 @@
 """The editor window: pygame events -> :class:`~koolio_pymunk.editor.model.EditorModel`.
 
-Start it with ``python tools/arena_editor.py [FILE] [--new] [--doors TABLE] [--script FILE]
-[--screenshot PNG] [--size WxH] [--grid INCHES]`` (see :func:`main`). The keys are listed
-in the side panel and in ``docs/editor.md``.
+Start it with ``koolio-pm edit [FILE] [--new] [--doors TABLE] [--script FILE]
+[--screenshot PNG] [--size WxH] [--grid INCHES]`` (the flags are in
+:mod:`~koolio_pymunk.editor.command`). The keys are listed in the side panel and in
+``docs/editor.md``.
 
 Everything the user does arrives as a pygame event and goes through
 :meth:`EditorApp.handle`, whether it comes from the keyboard and mouse or was posted by a
@@ -15,7 +16,6 @@ from __future__ import annotations
 import argparse
 import io
 import math
-import sys
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path as FilePath
@@ -868,27 +868,6 @@ class EditorApp:
 # =========================================================================================
 # Entry point
 # =========================================================================================
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        prog="arena_editor",
-        description="Edit Koolio arena files (walls, obstacles, goals, end-of-world markers, "
-        "start) in a pygame window; test-drive the robot in them.",
-    )
-    parser.add_argument("file", nargs="?", help="arena file to open (or a built-in name)")
-    parser.add_argument("--new", action="store_true", help="start a new arena (saved to FILE)")
-    parser.add_argument("--doors", metavar="TABLE", help="start from a door table (hallway)")
-    parser.add_argument("--script", metavar="FILE", help="run a scripted session, then exit")
-    parser.add_argument("--stay", action="store_true", help="stay open after --script")
-    parser.add_argument("--screenshot", metavar="PNG", help="save a screenshot at the end, exit")
-    parser.add_argument("--size", default="1280x720", help="window size WxH (default 1280x720)")
-    parser.add_argument(
-        "--grid", type=float, default=24.0, help="grid and snap step, inches (default 24: a tile)"
-    )
-    parser.add_argument("--robot", default="koolio", help="robot profile for clearance checks")
-    parser.add_argument("--config", help="configuration file for the test drive")
-    return parser
-
-
 def _size(text: str) -> tuple[int, int]:
     try:
         w, h = (int(v) for v in text.lower().split("x"))
@@ -921,9 +900,9 @@ def make_model(args: argparse.Namespace) -> EditorModel:
     return EditorModel.from_file(arena_path(args.file), **kw)
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Run the editor; 0 on success, 2 on bad input (one-line message on stderr)."""
-    args = build_parser().parse_args(argv)
+def run_editor(args: argparse.Namespace) -> int:
+    """Run the editor for the parsed flags of ``koolio-pm edit``
+    (:mod:`~koolio_pymunk.editor.command`); bad input raises :class:`KoolioError`."""
     try:
         size = _size(args.size)
         model = make_model(args)
@@ -937,9 +916,6 @@ def main(argv: list[str] | None = None) -> int:
             app.screenshot(args.screenshot)
         if (not args.script and not args.screenshot) or args.stay:
             app.run()
-    except KoolioError as exc:
-        print(f"arena_editor: error: {exc}", file=sys.stderr)
-        return 2
     finally:
         pygame.quit()
     return 0

@@ -1,0 +1,21 @@
+"""Fixtures shared by several test files."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from koolio_pymunk import cli
+
+
+@pytest.fixture(scope="session")
+def tiny_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A folder holding ``q.qtable`` and ``log.csv`` of a 2-episode training run in the
+    room (30-step cap), for the commands that read a table or a log."""
+    folder = tmp_path_factory.mktemp("tiny_run")
+    (folder / "tiny.yaml").write_text("episode: {max_steps: 30}\n")
+    args = ["train", "--arena", "room", "--episodes", "2", "--quiet", "--config"]
+    args += [str(folder / "tiny.yaml"), "--qtable", str(folder / "q.qtable")]
+    assert cli.main([*args, "--log", str(folder / "log.csv")]) == 0
+    return folder
