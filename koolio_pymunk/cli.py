@@ -102,20 +102,29 @@ def add_learning_files_args(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--log",
         default=None,
-        help="per-episode CSV log (default runs/<arena>.csv; '' for none)",
+        help="per-episode CSV log (default runs/<arena>.csv, or beside a given --qtable: "
+        "X.qtable -> X.csv; '' for none)",
     )
 
 
 def resolve_files(args: argparse.Namespace) -> None:
-    """Fill in the default ``--qtable`` / ``--log`` of the arena, refuse empty names."""
+    """Fill in the default ``--qtable`` / ``--log``, refuse empty names.
+
+    The defaults follow the arena (:func:`default_files`); a ``--qtable`` given without
+    ``--log`` takes the log beside it (``runs/back.qtable`` -> ``runs/back.csv``), so a new
+    table never meets another run's log.
+    """
     from .files import check_path
 
     check_path(args.arena, "--arena")
     table, log = default_files(args.arena)
+    if getattr(args, "log", "") is None:
+        given = getattr(args, "qtable", None)
+        args.log = (
+            log if given is None or not Path(given).name else str(Path(given).with_suffix(".csv"))
+        )
     if getattr(args, "qtable", "") is None:
         args.qtable = table
-    if getattr(args, "log", "") is None:
-        args.log = log
     for flag in ("qtable", "init_qtable", "config", "world"):  # --log '': no log
         value = getattr(args, flag, None)
         if value is not None:

@@ -186,14 +186,20 @@ class Reader:
         return args
 
     def supply_logs(self, args: list[str]) -> None:
-        """Logs that come from elsewhere (the robot, other runs): a 2-episode train log."""
-        for i, a in enumerate(args[:-1]):
-            log = self.folder / args[i + 1]
-            if a == "--log" and not log.exists():
+        """Logs that come from elsewhere (the robot, other runs): a 2-episode train log for
+        each log named by ``--log`` or positionally that no earlier command wrote."""
+        named = [args[i + 1] for i, a in enumerate(args[:-1]) if a == "--log"]
+        named += [
+            a for i, a in enumerate(args[1:], 1) if a.endswith(".csv") and args[i - 1] != "--out"
+        ]
+        for k, name in enumerate(dict.fromkeys(named)):
+            log = self.folder / name
+            if not log.exists():
                 log.parent.mkdir(parents=True, exist_ok=True)
+                table = f"supply{k}.qtable"
                 with contextlib.redirect_stdout(io.StringIO()):
                     train = ["train", "--arena", "room", "--episodes", "2", "--quiet"]
-                    assert cli.main([*train, "--qtable", "supply.qtable", "--log", str(log)]) == 0
+                    assert cli.main([*train, "--qtable", table, "--log", str(log)]) == 0
 
     def python(self, args: list[str]) -> str:
         if args[:2] == ["-m", "venv"]:
@@ -294,4 +300,4 @@ def test_an_unknown_command_fails(tmp_path: Path) -> None:
         Reader(tmp_path).run(["make", "install"])
     quiet = contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO())
     with reader_in(tmp_path) as reader, quiet[0], quiet[1], pytest.raises(AssertionError):
-        reader.run(["koolio-pm", "plot", "robot.csv"])  # the old, broken doc line
+        reader.run(["koolio-pm", "eval", "--qtable", "never-trained.qtable"])  # a broken line
