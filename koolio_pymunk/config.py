@@ -40,11 +40,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from .errors import ConfigError, located
 from .realism import RealismConfig, validate_realism
-from .yamlfile import read_yaml
+from .yamlfile import dump_yaml, read_yaml
 
 #: Robot profiles (paper §3): radius in inches.
 ROBOT_PROFILES: dict[str, float] = {
@@ -252,7 +250,7 @@ class Config:
         return dataclasses.asdict(self)
 
     def to_yaml(self) -> str:
-        return yaml.safe_dump(self.to_dict(), sort_keys=False, default_flow_style=None)
+        return dump_yaml(self.to_dict(), sort_keys=False, default_flow_style=None)
 
 
 #: Shipped configuration profiles: ``<name>.yaml`` in this folder.
@@ -420,6 +418,17 @@ def _coerce(value: Any, hint: Any, source: str, item: str) -> Any:
                 located(source, item, f"{len(value):,} entries (the limit is {MAX_LIST})")
             )
         return [_coerce(v, args[0], source, f"{item}[{i}]") for i, v in enumerate(value)]
+    if origin is dict and len(args) == 2:  # e.g. realism.randomize: name -> [low, high]
+        if not isinstance(value, dict):
+            raise ConfigError(located(source, item, f"expected a mapping, got {_show(value)}"))
+        if len(value) > MAX_LIST:
+            raise ConfigError(
+                located(source, item, f"{len(value):,} entries (the limit is {MAX_LIST})")
+            )
+        return {
+            _coerce(k, args[0], source, item): _coerce(v, args[1], source, f"{item}.{k}")
+            for k, v in value.items()
+        }
     return value
 
 
@@ -557,7 +566,7 @@ def _check_limits(cfg: Config, src: str) -> None:
         value = cfg
         for part in item.split("."):
             value = getattr(value, part)
-        _check(value <= most, src, item, f"must be <= {most:g} ({why}), got {value:g}")
+        _check(value <= most, src, item, f"must be <= {most:,} ({why}), got {value:,}")
 
 
 def _check_keyword_bits(cfg: Config, src: str) -> None:

@@ -54,7 +54,7 @@ import numpy as np
 from .errors import FileError, QTableError, located
 from .files import atomic_write, file_error, read_bytes, remove_stale_temps
 from .locks import FileLock
-from .robot_runtime import is_number
+from .robot_runtime import field_bits, is_number
 
 MAGIC = b"KOOLIOQT"
 FORMAT_VERSION = 1
@@ -77,11 +77,12 @@ class KeywordLayout:
 
     @property
     def bits(self) -> tuple[int, ...]:
-        return tuple(max(1, math.ceil(math.log2(levels))) for _, levels in self.fields)
+        """Bits of each field: ``max(1, ceil(log2(levels)))``, in integers (exact)."""
+        return tuple(field_bits(levels) for _, levels in self.fields)
 
     @property
     def action_bits(self) -> int:
-        return max(1, math.ceil(math.log2(self.n_actions)))
+        return field_bits(self.n_actions)
 
     @property
     def shifts(self) -> tuple[int, ...]:
@@ -518,8 +519,8 @@ def check_compatible(
                 located(
                     source,
                     f"sensors.{key}",
-                    f"table made for {_show(theirs.get(key), 80)}, "
-                    f"this run uses {_show(sensors.get(key), 80)}",
+                    f"table made for {_recorded(theirs, key)}, "
+                    f"this run uses {_recorded(sensors, key)}",
                 )
             )
     learned = table.meta.get("arena")
@@ -535,6 +536,12 @@ def check_compatible(
         f"{arena.get('sha256')}); it loads (same sensors), but its policy was learned elsewhere"
     )
     (warn or (lambda msg: print(f"warning: {msg}", file=sys.stderr)))(message)
+
+
+def _recorded(sensors: dict[str, Any], key: str) -> str:
+    """The value of ``key`` in a sensor signature, for a message (a missing key is not
+    ``None``: that could be a value)."""
+    return _show(sensors[key], 80) if key in sensors else "none (not recorded)"
 
 
 def _fmt_layout(layout: KeywordLayout) -> str:

@@ -530,13 +530,11 @@ def validate_document(doc: Any, source: str = "<policy>") -> None:
     if not isinstance(doc, dict):
         raise _err(source, "", "not a policy file (not a JSON object)")
     if doc.get("format") != FORMAT:
-        raise _err(
-            source, "format", "not a {} file (format {!r})".format(FORMAT, doc.get("format"))
-        )
+        raise _err(source, "format", f"not a {FORMAT} file (format {_show(doc.get('format'))})")
     version = doc.get("version")
     if not _is_int(version) or version > VERSION or version < 1:
         raise _err(
-            source, "version", f"unsupported version {version!r} (this reader knows {VERSION})"
+            source, "version", f"unsupported version {_show(version)} (this reader knows {VERSION})"
         )
     for key in ("layout", "encoding", "sensors", "q_init", "episodes", "entries"):
         if key not in doc:
@@ -600,12 +598,12 @@ def _check_layout(lay: Any, source: str) -> None:
     for i, f in enumerate(lay["fields"]):
         for key, want in (("bits", expect.bits[i]), ("shift", expect.shifts[i])):
             if key in f and f[key] != want:
-                raise _err(source, f"layout.fields[{i}].{key}", f"{f[key]!r}, expected {want}")
+                raise _err(source, f"layout.fields[{i}].{key}", f"{_show(f[key])}, expected {want}")
     if "action_bits" in lay and lay["action_bits"] != expect.action_bits:
         raise _err(
             source,
             "layout.action_bits",
-            f"{lay['action_bits']!r}, expected {expect.action_bits}",
+            f"{_show(lay['action_bits'])}, expected {expect.action_bits}",
         )
 
 
@@ -643,7 +641,7 @@ def _check_encoding(doc: dict[str, Any], source: str) -> None:
             raise _err(source, f"encoding.thresholds.{name}", "must be increasing, non-empty")
     for g in encoder.sonar_groups:
         if not g or any(not 0 <= i < encoder.n_sonar for i in g):
-            raise _err(source, "encoding.sonar_groups", f"bad group {g!r}")
+            raise _err(source, "encoding.sonar_groups", f"bad group {_show(g)}")
     lay = doc["layout"]
     got = [(str(f["name"]), f["levels"]) for f in lay["fields"]]
     if got != encoder.fields():
