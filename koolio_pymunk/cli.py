@@ -137,6 +137,7 @@ EXTRA_COMMANDS: dict[str, str] = {
     "plot": "koolio_pymunk.plotting",
     "export": "koolio_pymunk.export",
     "sweep": "koolio_pymunk.sweep",
+    "transfer": "koolio_pymunk.transfer",
 }
 
 
