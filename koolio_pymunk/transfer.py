@@ -103,9 +103,16 @@ class TransferConfig:
     episodes: int = 1500
     """Training episodes in simulation, for each table that is not loaded."""
     qtable: str | None = None
-    """Load the ``ideal`` table from this file (``.qtable`` or policy) instead of training."""
+    """Load the ``ideal`` table from this file (``.qtable`` or policy) instead of training;
+    ``{seed}`` in the name stands for the run seed (a table per seed)."""
     dr_qtable: str | None = None
-    """Load the ``dr`` table from this file instead of training."""
+    """Load the ``dr`` table from this file instead of training (``{seed}`` as above)."""
+
+    def table_file(self, source: str, seed: int) -> str | None:
+        """The file to load the ``source`` table from for ``seed`` (None: train it)."""
+        given = self.qtable if source == "ideal" else self.dr_qtable
+        return None if given is None else given.replace("{seed}", str(seed))
+
     robot_episodes: int = 100
     """Learning episodes on the (simulated) robot, through the runtime."""
     eval_episodes: int = 100
@@ -413,7 +420,7 @@ def obtain_table(
     (relative to the output folder when trained) and the training seconds."""
     world = None if source == "ideal" else cfg.dr_world
     env = make_env(cfg, world)
-    given = cfg.qtable if source == "ideal" else cfg.dr_qtable
+    given = cfg.table_file(source, seed)
     if given is not None:
         table = load_any_table(given)
         check_compatible(table, env.layout, sensor_signature(env.config), given)
@@ -515,9 +522,12 @@ def preflight(cfg: TransferConfig, out: Path) -> None:
     env = make_env(cfg, None)
     make_env(cfg, cfg.world)
     make_env(cfg, cfg.dr_world)
-    for given in (cfg.qtable, cfg.dr_qtable):
-        if given is not None:
-            check_compatible(load_any_table(given), env.layout, sensor_signature(env.config), given)
+    for seed in cfg.seeds:
+        for source in SOURCES:
+            given = cfg.table_file(source, seed)
+            if given is not None:
+                table = load_any_table(given)
+                check_compatible(table, env.layout, sensor_signature(env.config), given)
     check_output(out)
 
 
@@ -703,7 +713,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         default=d.episodes,
         help=f"training episodes in simulation per table (default {d.episodes})",
     )
-    p.add_argument("--qtable", default=None, help="load the ideal-world table instead of training")
+    p.add_argument(
+        "--qtable",
+        default=None,
+        help="load the ideal-world table instead of training ({seed}: the run seed)",
+    )
     p.add_argument(
         "--dr-qtable", default=None, help="load the randomized table instead of training"
     )

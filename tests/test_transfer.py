@@ -142,10 +142,11 @@ def _has_matplotlib() -> bool:
 
 def test_robot_settings_and_loaded_tables(tmp_path, capsys) -> None:
     """--robot-alpha / --robot-epsilon reach the runtime; --qtable / --dr-qtable are used
-    as given (no training)."""
+    as given, ``{seed}`` standing for the run seed (no training)."""
     assert transfer(tmp_path, "a", "--no-plot") == 0
     table = tmp_path / "a" / "seed-0" / "ideal.qtable"
-    args = ("--qtable", str(table), "--dr-qtable", str(table), "--no-plot")
+    pattern = str(tmp_path / "a" / "seed-{seed}" / "ideal.qtable")
+    args = ("--qtable", pattern, "--dr-qtable", str(table), "--no-plot")
     assert transfer(tmp_path, "b", *args, "--robot-alpha", "0.5", "--robot-epsilon", "0.1") == 0
     doc = without_timing(tmp_path / "b" / "transfer.json")
     assert {(r["robot"]["alpha"], r["robot"]["epsilon"]) for r in doc["runs"]} == {(0.5, 0.1)}

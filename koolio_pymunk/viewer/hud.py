@@ -182,6 +182,22 @@ def _fmt_distance(d: float, far: float) -> str:
     return "not seen" if d >= far else f"{d:.1f} in"
 
 
+def group_distance(values: Sequence[float], far: float) -> str:
+    """A sonar group's distance: the mean its level comes from; when some of its sonars
+    heard nothing and others did (the nothing, ``really_long_distance``, makes the mean
+    Far), each sonar's reading instead.
+
+    >>> group_distance([17.6, 20.0], 10000.0), group_distance([10000.0] * 2, 10000.0)
+    ('18.8 in', 'not seen')
+    >>> group_distance([17.6, 10000.0], 10000.0)
+    '17.6, none'
+    """
+    unseen = sum(v >= far for v in values)
+    if unseen in (0, len(values)):
+        return _fmt_distance(float(np.mean(values)), far)
+    return ", ".join("none" if v >= far else f"{v:.1f}" for v in values)
+
+
 def _deg(angle: float) -> str:
     return f"{angle:+.0f}°" if angle else "0°"
 
@@ -218,7 +234,7 @@ def hud_rows(env: KoolioEnv) -> list[HudRow]:
     for g in s.groups:
         name = "Sonar" + "-".join(str(k) for k in g)
         angles = ",".join(_deg(son[k]) for k in g)
-        d = _fmt_distance(float(np.mean(r.sonar[g])), s.far)
+        d = group_distance(r.sonar[g].tolist(), s.far)
         level = SONAR_LEVELS[codes[len(rows)]]
         lost = [str(k) for k in g if k in deaf]
         flags = ("no echo: " + ",".join(lost),) if lost else ()
