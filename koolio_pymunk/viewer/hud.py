@@ -42,8 +42,9 @@ FLAG_COLOURS: dict[str, Color] = {
     "no echo": (255, 190, 120),
 }
 """HUD marks of what the realism models did: a camera that misread another door's plate
-(magenta, as its line), one that missed a target in view (blue), sonars that heard no
-echo although their rays met a wall (orange)."""
+(magenta, as its line), one that missed a target in view (blue), a sonar row with a sonar
+that heard no echo although its rays met a wall (orange; the distance column shows which:
+``none, 52.9``)."""
 LEVEL_COLOURS: dict[str, Color] = {
     "Bump": (255, 170, 205),
     "Close": (255, 205, 150),
@@ -206,7 +207,7 @@ def _deg(angle: float) -> str:
 class HudRow:
     """One field of the state: name, sensor angles, encoded level, distance behind it,
     (sonar rows) the single sonars of the field that read Bump on their own, and marks of
-    what the realism models did (``misread``, ``missed``, ``no echo: 1,2``)."""
+    what the realism models did (``misread``, ``missed``, ``no echo``)."""
 
     name: str
     angles: str
@@ -236,8 +237,7 @@ def hud_rows(env: KoolioEnv) -> list[HudRow]:
         angles = ",".join(_deg(son[k]) for k in g)
         d = group_distance(r.sonar[g].tolist(), s.far)
         level = SONAR_LEVELS[codes[len(rows)]]
-        lost = [str(k) for k in g if k in deaf]
-        flags = ("no echo: " + ",".join(lost),) if lost else ()
+        flags = ("no echo",) if any(k in deaf for k in g) else ()
         rows.append(HudRow(name, angles, level, d, tuple(k for k in g if k in bumped), flags))
     if s.cfg.compass.in_state:
         rows.append(HudRow("Compass", "", COMPASS_LEVELS[codes[len(rows)]], f"{r.compass:.0f}/256"))
@@ -301,7 +301,8 @@ def draw_hud(
         mark = _hud_row(surface, row, cols, y, st)
         if mark is not None:
             marks.update(dict.fromkeys(row.bumped, mark))
-        x = cols[4] if mark is None else mark.right + st.px(4)
+        x = max(cols[4], cols[3] + text(row.distance, st.row, DIM).get_width() + st.px(6))
+        x = x if mark is None else mark.right + st.px(4)
         for word in row.flags:
             flags[row.name] = _flag_mark(surface, word, x, y, st)
             x = flags[row.name].right + st.px(4)
@@ -351,10 +352,10 @@ def _hud_row(
 
 
 def _flag_mark(surface: pygame.Surface, flag: str, x: int, y: int, st: Style) -> pygame.Rect:
-    """A realism mark (``misread``, ``missed``, ``no echo: k``) in its colour at ``x``."""
+    """A realism mark (``misread``, ``missed``, ``no echo``) in its colour at ``x``."""
     label = text(flag, st.small, INK)
     mark = pygame.Rect(x, y, label.get_width() + st.px(8), st.row_h - 1)
-    colour = FLAG_COLOURS[flag.partition(":")[0]]
+    colour = FLAG_COLOURS[flag]
     pygame.draw.rect(surface, colour, mark, border_radius=3)
     surface.blit(label, label.get_rect(center=mark.center))
     return mark
