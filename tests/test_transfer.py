@@ -100,7 +100,8 @@ def test_transfer_command_end_to_end_and_reproducible(tmp_path, capsys) -> None:
     assert transfer(tmp_path, "a", "--seed", "0", "1", "--target", "0") == 0
     out = capsys.readouterr().out
     assert "robot episode    3/3: greedy goal rate" in out
-    assert "seed  trained in" in out and "ideal: ideal" in out and "dr: ideal" in out
+    assert "seed  trained in" in out and "trained in the ideal world: greedy" in out
+    assert "trained in koolio-real-dr: greedy" in out
     doc = without_timing(tmp_path / "a" / "transfer.json")
     assert doc["format"] == "koolio-transfer" and doc["settings"]["seeds"] == [0, 1]
     assert [(r["seed"], r["source"]) for r in doc["runs"]] == [
