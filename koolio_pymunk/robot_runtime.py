@@ -879,6 +879,15 @@ class RobotLearner:
         self.bumps += int(bump)
         self.rescued = self.rescued or rescued
 
+    def moved(self, codes: Sequence[int]) -> None:
+        """The robot was moved by hand (a rescue, after :meth:`step`): the episode goes
+        on from the state of ``codes``, with no update (a person's move is no action of
+        the policy), and is logged as rescued."""
+        if self.state is None:
+            raise PolicyError("moved: call begin() first")
+        self.state = self.policy.state_key(codes)
+        self.rescued = True
+
     def end(self, outcome: str) -> None:
         """Finish the episode: count it, write its log row, save the table atomically."""
         episode = self.policy.episodes

@@ -9,6 +9,7 @@ command finds the files an earlier one wrote. How each kind of command is run:
 
 * ``koolio-pm ...`` (also ``.venv/bin/koolio-pm``, with ``VAR=value`` prefixes): the real
   ``koolio_pymunk.cli.main`` with the budget cut: ``train`` 2 episodes, ``eval`` 1,
+  ``transfer`` 2 training and 2 robot episodes with a 1-episode check after each,
   ``view`` 3 steps or 1 episode with screenshots every step, ``sweep`` on a copy of its
   spec cut to 1 configuration x 1 seed x 2 episodes (the documented spec itself is read
   by ``--dry-run``), each sweep into a fresh output folder so that none merely resumes;
@@ -73,10 +74,11 @@ def shell_blocks(text: str) -> list[str]:
 
 
 def documented_commands(page: str) -> list[list[str]]:
-    """The commands of ``page``'s shell blocks: argument lists, ``&&`` chains split."""
+    """The commands of ``page``'s shell blocks: argument lists, ``&&`` chains split, lines
+    ending in a backslash joined to the next (as the shell does)."""
     out = []
     for block in shell_blocks((REPO / page).read_text()):
-        for line in block.splitlines():
+        for line in block.replace("\\\n", " ").splitlines():
             words = shlex.split(line, comments=True)
             while words:
                 part = words[: words.index("&&")] if "&&" in words else words
@@ -157,6 +159,10 @@ class Reader:
             return self.subprocess(["-m", "koolio_pymunk", *self.editor_args(args)])
         elif command == "plot":
             self.supply_logs(args)
+        elif command == "transfer":
+            for flag, value in (("--episodes", "2"), ("--robot-episodes", "2")):
+                args = _set(args, flag, value)
+            args = _set(_set(args, "--eval-episodes", "1"), "--eval-every", "1")
         try:
             status = cli.main(args)
         except SystemExit as exc:  # argparse refused the command line
