@@ -242,6 +242,7 @@ def _seed_table(init_path: str, qtable_path: str, env, say) -> None:
     from pathlib import Path
 
     from .export import load_any_table
+    from .learner import adopt
     from .qtable import QTableStore, check_compatible
     from .training import sensor_signature
 
@@ -252,6 +253,7 @@ def _seed_table(init_path: str, qtable_path: str, env, say) -> None:
         )
     table = load_any_table(init_path)
     check_compatible(table, env.layout, sensor_signature(env.config), init_path)
+    adopt(table, env.config.learner, init_path)  # its Q values, this run's algorithm
     store = QTableStore(qtable_path)
     store.save(table)
     say(

@@ -7,6 +7,11 @@ the keyword layout, and the sensor thresholds the robot needs to encode raw read
 ``docs/handoff.md``). ``koolio_pymunk/robot_runtime.py`` (standard library only) runs and
 keeps learning that policy on the robot and saves it back in the same format.
 
+The robot's learning settings (``learner``: alpha, gamma, epsilon, and the algorithm with
+its parameters when it is not one-step Q) come from ``--config``, like the rewards. A
+Dyna-Q model is never exported (it describes the simulated world, and the robot builds its
+own from real steps), nor read back from a policy file.
+
 The input may be a ``.qtable`` file or a policy file (e.g. one back from the robot); an
 ``--out`` name ending in ``.qtable`` writes the simulator's binary format instead, so a
 table learned on the robot can be evaluated or viewed with the other commands.
@@ -24,6 +29,7 @@ from typing import Any
 from . import robot_runtime as rt
 from .config import Config, load_config
 from .errors import QTableError, located
+from .learner import algorithm_record
 from .qtable import MAGIC, KeywordLayout, QTable, atomic_write, load_qtable
 
 WRITTEN_BY = "koolio-pm export"
@@ -124,7 +130,8 @@ def policy_document(
             "alpha": cfg.learner.alpha,
             "gamma": cfg.learner.gamma,
             "epsilon": cfg.learner.epsilon.at(max(0, eps_episode)),
-        },
+        }
+        | _algorithm(cfg),
         "rewards": {k: float(v) for k, v in vars(cfg.rewards).items()},
         "q_init": float(table.q_init),
         "episodes": episodes,
@@ -135,6 +142,15 @@ def policy_document(
     except rt.PolicyError as exc:
         raise QTableError(str(exc)) from None
     return doc
+
+
+def _algorithm(cfg: Config) -> dict[str, Any]:
+    """The ``learner`` keys of a non-default algorithm (none for one-step Q). The Dyna-Q
+    model is not exported: it describes the simulated world; the robot builds its own."""
+    rec = algorithm_record(cfg.learner)
+    if rec is None:
+        return {}
+    return {"algorithm": rec.pop("name")} | rec
 
 
 def write_policy(doc: dict[str, Any], out: Path) -> None:
@@ -157,7 +173,10 @@ def table_from_policy(policy: rt.Policy) -> QTable:
     layout = KeywordLayout(tuple(zip(lay.names, lay.levels)), lay.n_actions)
     if layout.bits != lay.bits or layout.shifts != lay.shifts:  # pragma: no cover
         raise QTableError(f"{policy.source}: layout: keyword bits differ from the simulator's")
-    meta = {"sensors": policy.sensors, "episodes": policy.episodes}
+    meta: dict[str, Any] = {"sensors": policy.sensors, "episodes": policy.episodes}
+    if policy.algorithm != "q":  # the robot's Dyna-Q model stays with the robot
+        params = {k: policy.learner[k] for k in rt.ALGORITHMS[policy.algorithm]}
+        meta["algorithm"] = {"name": policy.algorithm} | params
     rows = {k: list(v) for k, v in policy.rows.items()}
     return QTable(layout, meta, policy.q_init, rows)
 

@@ -44,6 +44,10 @@ often and every save is two fsynced file writes), and always at the end and on C
 ``save_every=1`` is the paper's cadence. Ctrl-C folds every unfinished episode into the
 table (logged ``interrupted``); with ``discard_unfinished`` the table file is left as last
 saved.
+
+**Algorithm.** One-step Q only (``learner.algorithm: q``): Q(lambda) and Dyna-Q
+(``docs/learning.md``) are refused with a one-line error, since the compiled loop has
+neither per-robot traces nor a model.
 """
 
 from __future__ import annotations
@@ -57,6 +61,8 @@ import numpy as np
 import pymunk.batch
 
 from .env import KoolioEnv
+from .errors import ConfigError, located
+from .learner import attach
 from .qkernel import (
     EVENTS,
     RESCUE_DRAW,
@@ -264,8 +270,18 @@ class _Run:
         save_every: int | None,
     ) -> None:
         cfg = env.config
+        if cfg.learner.algorithm != "q":
+            raise ConfigError(
+                located(
+                    f"--robots {robots}",
+                    "learner.algorithm",
+                    f"{cfg.learner.algorithm} learns with one robot only: the compiled "
+                    "many-robot loop (qkernel) has one-step Q only (use --robots 1)",
+                )
+            )
         self.env, self.cfg, self.store = env, cfg, store
         self.table = store.open(env.layout, sensor_signature(cfg), cfg.learner.q_init)
+        attach(self.table, cfg.learner, str(store.path))
         self.shared = SharedTable(self.table)
         self.first = int(self.table.meta.get("episodes", 0))
         self.budget = episodes

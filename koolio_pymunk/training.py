@@ -29,7 +29,7 @@ import numpy as np
 
 from .config import Config
 from .env import KoolioEnv
-from .learner import QLearner
+from .learner import QLearner, attach, make_learner
 from .qtable import QTable, QTableStore, load_qtable
 
 LOG_FIELDS = ("episode", "reward", "steps", "bumps", "outcome", "rescued", "epsilon", "goal")
@@ -103,7 +103,7 @@ def run_episode(
         action = agent.act(state)
         nxt, reward, terminated, truncated = env.transition(action)
         if learn:  # paper §5.4.8: update, then the rescue check (done by the env)
-            agent.update(state, action, reward, nxt, terminated)
+            agent.observe(state, action, reward, nxt, terminated)
         state = env.state_key
         if terminated:
             return env.episode_reward, env.steps, env.judgement.event  # type: ignore[union-attr]
@@ -204,17 +204,18 @@ def train(
     """
     cfg = env.config
     table = store.open(env.layout, sensor_signature(cfg), cfg.learner.q_init)
+    attach(table, cfg.learner, str(store.path))
     first = int(table.meta.get("episodes", 0))
     log = LogWriter(log_path)
     progress = Progress()
     results: list[EpisodeResult] = []
-    agent = QLearner(table, cfg.learner, np.random.default_rng(seed))
+    agent = make_learner(table, cfg.learner, np.random.default_rng(seed))
     last_report = time.perf_counter()
     interrupted = False
     try:
         for e in range(first, first + episodes):
-            env_seed, agent.rng = episode_seeds(seed, e)
-            agent.set_episode(e)
+            env_seed, rng = episode_seeds(seed, e)
+            agent.begin_episode(e, rng)
             env.reset(seed=env_seed)
             reward, steps, outcome = run_episode(env, agent, learn=True)
             res = EpisodeResult(
