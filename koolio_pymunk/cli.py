@@ -347,6 +347,14 @@ def cmd_info(args: argparse.Namespace) -> int:
             f"({share:.3%} of dense), {human_bytes(table.nbytes())} in the file, "
             f"{table.meta.get('episodes', 0)} episodes"
         )
+        rec = table.meta.get("algorithm")
+        if isinstance(rec, dict):
+            params = ", ".join(f"{k} {v}" for k, v in rec.items() if k != "name")
+            sections = ", ".join(f"{k} {human_bytes(len(v))}" for k, v in table.sections.items())
+            print(
+                f"  learned with {rec.get('name')} ({params})"
+                + (f"; {sections}" if sections else "")
+            )
     return 0
 
 
