@@ -161,11 +161,17 @@ class DynaQ(QLearner):
     name = "dyna"
     sections = (SECTION,)
 
-    def __init__(self, table: QTable, cfg: LearnerConfig, rng: np.random.Generator) -> None:
+    def __init__(
+        self,
+        table: QTable,
+        cfg: LearnerConfig,
+        rng: np.random.Generator,
+        source: str = "<table>",
+    ) -> None:
         super().__init__(table, cfg, rng)
         self.planning_steps = cfg.planning_steps
         found = table.sections.get(SECTION, b"")
-        self.model = found if isinstance(found, Model) else Model.from_bytes(bytes(found))
+        self.model = found if isinstance(found, Model) else Model.from_bytes(bytes(found), source)
         table.sections[SECTION] = self.model  # serialized with the table at every save
 
     def observe(

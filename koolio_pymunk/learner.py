@@ -110,8 +110,11 @@ class QLearner:
         return row[action]
 
 
-def make_learner(table: QTable, cfg: LearnerConfig, rng: np.random.Generator) -> QLearner:
-    """The learner of ``cfg.algorithm`` on ``table``."""
+def make_learner(
+    table: QTable, cfg: LearnerConfig, rng: np.random.Generator, source: str = "<table>"
+) -> QLearner:
+    """The learner of ``cfg.algorithm`` on ``table`` (``source`` names the table's file in
+    errors about the data it keeps there)."""
     if cfg.algorithm == "qlambda":
         from .qlambda import QLambda
 
@@ -119,7 +122,7 @@ def make_learner(table: QTable, cfg: LearnerConfig, rng: np.random.Generator) ->
     if cfg.algorithm == "dyna":
         from .dyna import DynaQ
 
-        return DynaQ(table, cfg, rng)
+        return DynaQ(table, cfg, rng, source)
     return QLearner(table, cfg, rng)
 
 

@@ -209,7 +209,7 @@ def train(
     log = LogWriter(log_path)
     progress = Progress()
     results: list[EpisodeResult] = []
-    agent = make_learner(table, cfg.learner, np.random.default_rng(seed))
+    agent = make_learner(table, cfg.learner, np.random.default_rng(seed), str(store.path))
     last_report = time.perf_counter()
     interrupted = False
     try:

@@ -136,11 +136,10 @@ class Session:
             self.stats.returns = read_returns(log)
             self.stats.run_start = len(self.stats.returns)
         rng = np.random.default_rng(seed)
-        self.agent = (
-            make_learner(self.table, cfg.learner, rng)
-            if self.learn
-            else QLearner(self.table, cfg.learner, rng)
-        )
+        if self.learn:
+            self.agent = make_learner(self.table, cfg.learner, rng, str(qtable))
+        else:
+            self.agent = QLearner(self.table, cfg.learner, rng)
         self.episode = self.first
         self.last = None if episodes is None else self.first + episodes
         self.total_steps = 0
