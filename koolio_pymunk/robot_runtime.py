@@ -762,6 +762,11 @@ class RobotLearner:
     False runs the greedy policy without updates (``epsilon`` then defaults to 0).
     Outcomes for :meth:`end`: ``goal``, ``end_of_world``, ``truncated`` or
     ``interrupted``, as in the simulator's log.
+
+    The file's ``learner.algorithm`` chooses the learning (:meth:`learn_step`): one-step
+    Q, Q(lambda) with :class:`Traces` (cleared at :meth:`begin` and after a non-greedy
+    choice), or Dyna-Q with the policy's :class:`Model` (saved in the policy file by
+    :meth:`end`, so the next session continues from it).
     """
 
     def __init__(
