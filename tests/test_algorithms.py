@@ -362,3 +362,24 @@ def test_policy_file_learner_algorithm_is_validated(tmp_path) -> None:
     bad["learner"] = {"alpha": 0.2}
     with pytest.raises(rt.PolicyError, match=r"^p\.json: model: only a dyna policy has a model"):
         rt.Policy(bad, "p.json")
+
+
+def test_table_sections_round_trip_and_are_checked() -> None:
+    import struct
+    import zlib
+
+    t = QTable(LAYOUT, {"episodes": 1}, -3.0)
+    t.row(2)[1] = 4.5
+    t.sections = {"b": b"\x01\x02", "a": b"xyz"}
+    data = t.to_bytes()
+    back = QTable.from_bytes(data)
+    assert back.sections == {"a": b"xyz", "b": b"\x01\x02"} and back.rows == t.rows
+    assert back.to_bytes() == data
+    # a header that lists one byte too many, with a valid checksum: refused
+    bad = data[:-4].replace(b'["b",2]', b'["b",3]')  # same header length
+    with pytest.raises(QTableError, match="length does not match"):
+        QTable.from_bytes(bad + struct.pack("<I", zlib.crc32(bad)))
+    bad = data[:-4].replace(b'["b",2]', b'["b",-2]')  # one byte longer header
+    bad = bad[:8] + struct.pack("<I", struct.unpack_from("<I", bad, 8)[0] + 1) + bad[12:]
+    with pytest.raises(QTableError, match=r"sections must be \[\[name, length\], \.\.\.\]"):
+        QTable.from_bytes(bad + struct.pack("<I", zlib.crc32(bad)))
