@@ -349,6 +349,7 @@ def _seed_table(init_path: str, store, log: str, env, say) -> None:
     from .arena import arena_record
     from .episode_log import check_log_path, log_rows
     from .export import load_any_table
+    from .learner import adopt
     from .qtable import check_compatible
     from .training import sensor_signature
 
@@ -370,6 +371,7 @@ def _seed_table(init_path: str, store, log: str, env, say) -> None:
         check_compatible(
             table, env.layout, sensor_signature(env.config), init_path, arena_record(env.arena)
         )
+        adopt(table, env.config.learner, init_path)  # its Q values, this run's algorithm
         store.create(table)
     except BaseException:
         store.close()
@@ -468,6 +470,14 @@ def cmd_info(args: argparse.Namespace) -> int:
             f"({share:.3%} of dense), {human_bytes(table.nbytes())} in the file, "
             f"{table.meta.get('episodes', 0)} episodes"
         )
+        rec = table.meta.get("algorithm")
+        if isinstance(rec, dict):
+            params = ", ".join(f"{k} {v}" for k, v in rec.items() if k != "name")
+            sections = ", ".join(f"{k} {human_bytes(len(v))}" for k, v in table.sections.items())
+            print(
+                f"  learned with {rec.get('name')} ({params})"
+                + (f"; {sections}" if sections else "")
+            )
     return 0
 
 

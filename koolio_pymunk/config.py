@@ -210,8 +210,18 @@ class EpsilonSchedule:
         return self.start + (self.end - self.start) * episode / self.decay_episodes
 
 
+#: Learning algorithms (``learner.algorithm``); see ``docs/learning.md``.
+ALGORITHMS: tuple[str, ...] = ("q", "qlambda", "dyna")
+
+
 @dataclass
 class LearnerConfig:
+    algorithm: str = "q"
+    """``q``: one-step Q-learning, the paper's Table 11 (:mod:`koolio_pymunk.learner`);
+    ``qlambda``: Watkins's Q(lambda) with replacing traces (:mod:`koolio_pymunk.qlambda`);
+    ``dyna``: Dyna-Q, ``planning_steps`` simulated updates per real step from a model of
+    the transitions seen (:mod:`koolio_pymunk.dyna`). Not in the paper, which uses one-step
+    Q; the other two learn from fewer episodes (``docs/learning.md``)."""
     alpha: float = 0.2
     """Learning rate of the Table 11 update."""
     gamma: float = 0.98
@@ -225,6 +235,15 @@ class LearnerConfig:
     (RotateLeft / RotateRight between two aliased states) sinks below -30 until the
     untried alternative gets its turn (measured with 15-degree turns, seed 0: 96 % greedy
     goal rate after 800 episodes with -30, 72 % with 0)."""
+    trace_decay: float = 0.9
+    """``qlambda``: lambda, the decay of the eligibility traces per step (with gamma):
+    0 is one-step Q, 1 credits every step back to the last exploratory action."""
+    trace_cutoff: float = 0.01
+    """``qlambda``: a trace below this is dropped, so a step updates a few dozen entries
+    (with gamma 0.98 and lambda 0.9 a trace lives 37 steps)."""
+    planning_steps: int = 10
+    """``dyna``: simulated updates from the model after every real step (n in Sutton and
+    Barto's Dyna-Q); 0 is one-step Q that also records the model."""
 
 
 @dataclass
@@ -547,6 +566,15 @@ def _validate(cfg: Config, src: str) -> None:
             0 <= getattr(le.epsilon, name) <= 1, src, f"learner.epsilon.{name}", "must be in [0, 1]"
         )
     _check(le.epsilon.decay_episodes >= 0, src, "learner.epsilon.decay_episodes", "must be >= 0")
+    _check(
+        le.algorithm in ALGORITHMS,
+        src,
+        "learner.algorithm",
+        f"unknown algorithm {le.algorithm!r} (valid: {', '.join(ALGORITHMS)})",
+    )
+    _check(0 <= le.trace_decay <= 1, src, "learner.trace_decay", "must be in [0, 1] (lambda)")
+    _check(0 < le.trace_cutoff < 1, src, "learner.trace_cutoff", "must be in (0, 1)")
+    _check(le.planning_steps >= 0, src, "learner.planning_steps", "must be >= 0")
     validate_realism(cfg.realism, src)
     _check_limits(cfg, src)
     _check_keyword_bits(cfg, src)
@@ -558,6 +586,7 @@ LIMITS: dict[str, tuple[float, str]] = {
     "rescue.rescue_max_backup": (100, "each backup is a move; 100 is 100 moves per rescue"),
     "sensors.sonar.sub_arcs": (360, "one ray per sub-arc and sonar at every step"),
     "episode.clockless_loop_count": (1_000_000, "steps per timer tick of the window"),
+    "learner.planning_steps": (10_000, "simulated updates of Dyna-Q at every real step"),
 }
 
 

@@ -16,7 +16,8 @@ command finds the files an earlier one wrote. How each kind of command is run:
   ``--ray`` and ``--ray auto`` use one Ray instance the test starts; ``edit`` and
   ``tools/arena_editor.py`` get ``--screenshot`` so the window closes; a synopsis's
   ``[--flag VALUE]`` runs with the flag;
-* ``python tools/X.py``: the script itself (``view_bench.py``: 2 episodes, 1 repeat);
+* ``python tools/X.py``: the script itself (``view_bench.py``: 2 episodes, 1 repeat;
+  ``learning_targets.py``: seed 0 and a budget of 5 episodes); a ``nice`` prefix is dropped;
 * ``koolio-pm edit``, ``tools/arena_editor.py`` and ``python .../robot_runtime.py``: a
   separate interpreter (``-I`` for the runtime: as on the robot); ``scp FILES
   robot:DIR/`` copies them into the folder ``robot/DIR`` where the robot's commands run;
@@ -94,6 +95,18 @@ def _editor_script() -> str:
     return text[start : text.index("```", start)]
 
 
+#: What ``tools/learning_targets.py`` gets in the docs test: a seed and a few episodes.
+LEARNING_TARGETS_BUDGET = (
+    ("--seeds", "0"),
+    ("--workers", "1"),
+    ("--every", "5"),
+    ("--max-episodes", "5"),
+    ("--paper-episodes", "5"),
+    ("--paper-every", "5"),
+    ("--random-episodes", "5"),
+)
+
+
 def _set(args: list[str], flag: str, value: str) -> list[str]:
     """``args`` with ``flag value`` replaced, or appended."""
     if flag in args:
@@ -122,6 +135,8 @@ class Reader:
             key, _, value = words.pop(0).partition("=")
             env[key] = value
         assert env in ({}, {"SDL_VIDEODRIVER": "dummy"}), env
+        if words[:1] == ["nice"]:
+            words = words[1:]
         program, args = words[0], words[1:]
         if program.endswith("koolio-pm"):
             return self.koolio_pm(_fill_synopsis(args))
@@ -217,6 +232,10 @@ class Reader:
             return self.subprocess([script, *self.editor_args(["edit", *args[1:]])[1:]])
         if script == "tools/view_bench.py":
             args = _set(_set(args, "--episodes", "2"), "--repeat", "1")
+            return self.script(REPO / script, args[1:])
+        if script == "tools/learning_targets.py":  # one seed, a budget of a few episodes
+            for flag, value in LEARNING_TARGETS_BUDGET:
+                args = _set(args, flag, value)
             return self.script(REPO / script, args[1:])
         if script.endswith("robot_runtime.py"):
             where = self.robot if script == "robot_runtime.py" else self.folder
