@@ -32,8 +32,6 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import NoReturn
 
-import yaml
-
 from koolio_pymunk import geometry, yamlfile
 from koolio_pymunk.errors import ArenaError, located
 from koolio_pymunk.files import atomic_write_text
@@ -745,7 +743,7 @@ def arena_to_dict(arena: Arena) -> dict:
 
 def arena_to_yaml(arena: Arena, header: str = "") -> str:
     """YAML text for the arena, preceded by ``header`` as ``#`` comment lines."""
-    body = yaml.safe_dump(
+    body = yamlfile.dump_yaml(
         arena_to_dict(arena),
         sort_keys=False,
         default_flow_style=None,

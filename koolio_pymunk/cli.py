@@ -105,26 +105,28 @@ def add_learning_files_args(p: argparse.ArgumentParser) -> None:
         help="per-episode CSV log (default runs/<arena>.csv, or beside a given --qtable: "
         "X.qtable -> X.csv; '' for none)",
     )
+    p.set_defaults(files_follow_arena=True)
 
 
 def resolve_files(args: argparse.Namespace) -> None:
     """Fill in the default ``--qtable`` / ``--log``, refuse empty names.
 
-    The defaults follow the arena (:func:`default_files`); a ``--qtable`` given without
+    For the commands that declare ``files_follow_arena`` (train, eval, view) the defaults
+    follow the arena (:func:`default_files`); a ``--qtable`` given without
     ``--log`` takes the log beside it (``runs/back.qtable`` -> ``runs/back.csv``), so a new
     table never meets another run's log.
     """
     from .files import check_path
 
     check_path(args.arena, "--arena")
-    table, log = default_files(args.arena)
-    if getattr(args, "log", "") is None:
-        given = getattr(args, "qtable", None)
-        args.log = (
-            log if given is None or not Path(given).name else str(Path(given).with_suffix(".csv"))
-        )
-    if getattr(args, "qtable", "") is None:
-        args.qtable = table
+    if getattr(args, "files_follow_arena", False):  # train, eval, view (not transfer)
+        table, log = default_files(args.arena)
+        if getattr(args, "log", "") is None:
+            given = args.qtable
+            beside = given is not None and Path(given).name
+            args.log = str(Path(given).with_suffix(".csv")) if beside else log
+        if args.qtable is None:
+            args.qtable = table
     for flag in ("qtable", "init_qtable", "config", "world"):  # --log '': no log
         value = getattr(args, flag, None)
         if value is not None:
@@ -175,6 +177,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="Q-table file (.qtable, or a policy exported for the robot; default "
         "runs/<arena>.qtable)",
     )
+    p.set_defaults(files_follow_arena=True)
     p.add_argument("--episodes", type=int, default=100, help="episodes (default 100)")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
 
@@ -201,6 +204,7 @@ EXTRA_COMMANDS: dict[str, str] = {
     "export": "koolio_pymunk.export",
     "sweep": "koolio_pymunk.sweep",
     "edit": "koolio_pymunk.editor.command",
+    "transfer": "koolio_pymunk.transfer",
 }
 
 
@@ -345,6 +349,7 @@ def _seed_table(init_path: str, store, log: str, env, say) -> None:
     from .arena import arena_record
     from .episode_log import check_log_path, log_rows
     from .export import load_any_table
+    from .learner import adopt
     from .qtable import check_compatible
     from .training import sensor_signature
 
@@ -366,6 +371,7 @@ def _seed_table(init_path: str, store, log: str, env, say) -> None:
         check_compatible(
             table, env.layout, sensor_signature(env.config), init_path, arena_record(env.arena)
         )
+        adopt(table, env.config.learner, init_path)  # its Q values, this run's algorithm
         store.create(table)
     except BaseException:
         store.close()
@@ -464,6 +470,14 @@ def cmd_info(args: argparse.Namespace) -> int:
             f"({share:.3%} of dense), {human_bytes(table.nbytes())} in the file, "
             f"{table.meta.get('episodes', 0)} episodes"
         )
+        rec = table.meta.get("algorithm")
+        if isinstance(rec, dict):
+            params = ", ".join(f"{k} {v}" for k, v in rec.items() if k != "name")
+            sections = ", ".join(f"{k} {human_bytes(len(v))}" for k, v in table.sections.items())
+            print(
+                f"  learned with {rec.get('name')} ({params})"
+                + (f"; {sections}" if sections else "")
+            )
     return 0
 
 

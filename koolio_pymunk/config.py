@@ -40,11 +40,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from .errors import ConfigError, located
 from .realism import RealismConfig, validate_realism
-from .yamlfile import read_yaml
+from .yamlfile import dump_yaml, read_yaml
 
 #: Robot profiles (paper §3): radius in inches.
 ROBOT_PROFILES: dict[str, float] = {
@@ -212,8 +210,18 @@ class EpsilonSchedule:
         return self.start + (self.end - self.start) * episode / self.decay_episodes
 
 
+#: Learning algorithms (``learner.algorithm``); see ``docs/learning.md``.
+ALGORITHMS: tuple[str, ...] = ("q", "qlambda", "dyna")
+
+
 @dataclass
 class LearnerConfig:
+    algorithm: str = "q"
+    """``q``: one-step Q-learning, the paper's Table 11 (:mod:`koolio_pymunk.learner`);
+    ``qlambda``: Watkins's Q(lambda) with replacing traces (:mod:`koolio_pymunk.qlambda`);
+    ``dyna``: Dyna-Q, ``planning_steps`` simulated updates per real step from a model of
+    the transitions seen (:mod:`koolio_pymunk.dyna`). Not in the paper, which uses one-step
+    Q; the other two learn from fewer episodes (``docs/learning.md``)."""
     alpha: float = 0.2
     """Learning rate of the Table 11 update."""
     gamma: float = 0.98
@@ -227,6 +235,15 @@ class LearnerConfig:
     (RotateLeft / RotateRight between two aliased states) sinks below -30 until the
     untried alternative gets its turn (measured with 15-degree turns, seed 0: 96 % greedy
     goal rate after 800 episodes with -30, 72 % with 0)."""
+    trace_decay: float = 0.9
+    """``qlambda``: lambda, the decay of the eligibility traces per step (with gamma):
+    0 is one-step Q, 1 credits every step back to the last exploratory action."""
+    trace_cutoff: float = 0.01
+    """``qlambda``: a trace below this is dropped, so a step updates a few dozen entries
+    (with gamma 0.98 and lambda 0.9 a trace lives 37 steps)."""
+    planning_steps: int = 10
+    """``dyna``: simulated updates from the model after every real step (n in Sutton and
+    Barto's Dyna-Q); 0 is one-step Q that also records the model."""
 
 
 @dataclass
@@ -252,7 +269,7 @@ class Config:
         return dataclasses.asdict(self)
 
     def to_yaml(self) -> str:
-        return yaml.safe_dump(self.to_dict(), sort_keys=False, default_flow_style=None)
+        return dump_yaml(self.to_dict(), sort_keys=False, default_flow_style=None)
 
 
 #: Shipped configuration profiles: ``<name>.yaml`` in this folder.
@@ -420,6 +437,17 @@ def _coerce(value: Any, hint: Any, source: str, item: str) -> Any:
                 located(source, item, f"{len(value):,} entries (the limit is {MAX_LIST})")
             )
         return [_coerce(v, args[0], source, f"{item}[{i}]") for i, v in enumerate(value)]
+    if origin is dict and len(args) == 2:  # e.g. realism.randomize: name -> [low, high]
+        if not isinstance(value, dict):
+            raise ConfigError(located(source, item, f"expected a mapping, got {_show(value)}"))
+        if len(value) > MAX_LIST:
+            raise ConfigError(
+                located(source, item, f"{len(value):,} entries (the limit is {MAX_LIST})")
+            )
+        return {
+            _coerce(k, args[0], source, item): _coerce(v, args[1], source, f"{item}.{k}")
+            for k, v in value.items()
+        }
     return value
 
 
@@ -538,6 +566,15 @@ def _validate(cfg: Config, src: str) -> None:
             0 <= getattr(le.epsilon, name) <= 1, src, f"learner.epsilon.{name}", "must be in [0, 1]"
         )
     _check(le.epsilon.decay_episodes >= 0, src, "learner.epsilon.decay_episodes", "must be >= 0")
+    _check(
+        le.algorithm in ALGORITHMS,
+        src,
+        "learner.algorithm",
+        f"unknown algorithm {le.algorithm!r} (valid: {', '.join(ALGORITHMS)})",
+    )
+    _check(0 <= le.trace_decay <= 1, src, "learner.trace_decay", "must be in [0, 1] (lambda)")
+    _check(0 < le.trace_cutoff < 1, src, "learner.trace_cutoff", "must be in (0, 1)")
+    _check(le.planning_steps >= 0, src, "learner.planning_steps", "must be >= 0")
     validate_realism(cfg.realism, src)
     _check_limits(cfg, src)
     _check_keyword_bits(cfg, src)
@@ -549,6 +586,7 @@ LIMITS: dict[str, tuple[float, str]] = {
     "rescue.rescue_max_backup": (100, "each backup is a move; 100 is 100 moves per rescue"),
     "sensors.sonar.sub_arcs": (360, "one ray per sub-arc and sonar at every step"),
     "episode.clockless_loop_count": (1_000_000, "steps per timer tick of the window"),
+    "learner.planning_steps": (10_000, "simulated updates of Dyna-Q at every real step"),
 }
 
 
@@ -557,7 +595,7 @@ def _check_limits(cfg: Config, src: str) -> None:
         value = cfg
         for part in item.split("."):
             value = getattr(value, part)
-        _check(value <= most, src, item, f"must be <= {most:g} ({why}), got {value:g}")
+        _check(value <= most, src, item, f"must be <= {most:,} ({why}), got {value:,}")
 
 
 def _check_keyword_bits(cfg: Config, src: str) -> None:

@@ -7,6 +7,11 @@ the keyword layout, and the sensor thresholds the robot needs to encode raw read
 ``docs/handoff.md``). ``koolio_pymunk/robot_runtime.py`` (standard library only) runs and
 keeps learning that policy on the robot and saves it back in the same format.
 
+The robot's learning settings (``learner``: alpha, gamma, epsilon, and the algorithm with
+its parameters when it is not one-step Q) come from ``--config``, like the rewards. A
+Dyna-Q model is never exported (it describes the simulated world, and the robot builds its
+own from real steps), nor read back from a policy file.
+
 The input may be a ``.qtable`` file or a policy file (e.g. one back from the robot); an
 ``--out`` name ending in ``.qtable`` writes the simulator's binary format instead, so a
 table learned on the robot can be evaluated or viewed with the other commands.
@@ -25,6 +30,7 @@ from . import robot_runtime as rt
 from .config import Config, load_config
 from .errors import QTableError, located
 from .files import atomic_write, check_path, os_problem
+from .learner import algorithm_record
 from .locks import FileLock
 from .qtable import MAGIC, KeywordLayout, QTable, load_qtable
 
@@ -127,7 +133,8 @@ def policy_document(
             "alpha": cfg.learner.alpha,
             "gamma": cfg.learner.gamma,
             "epsilon": cfg.learner.epsilon.at(max(0, eps_episode)),
-        },
+        }
+        | _algorithm(cfg),
         "rewards": {k: float(v) for k, v in vars(cfg.rewards).items()},
         "q_init": float(table.q_init),
         "episodes": episodes,
@@ -173,6 +180,15 @@ def check_sensor_signature(sensors: dict[str, Any], source: str) -> None:
         raise bad("compass_in_state", "true or false")
 
 
+def _algorithm(cfg: Config) -> dict[str, Any]:
+    """The ``learner`` keys of a non-default algorithm (none for one-step Q). The Dyna-Q
+    model is not exported: it describes the simulated world; the robot builds its own."""
+    rec = algorithm_record(cfg.learner)
+    if rec is None:
+        return {}
+    return {"algorithm": rec.pop("name")} | rec
+
+
 def write_policy(doc: dict[str, Any], out: Path) -> None:
     """Write a policy document atomically (:class:`~koolio_pymunk.errors.FileError` if it
     cannot be written)."""
@@ -196,6 +212,9 @@ def table_from_policy(policy: rt.Policy) -> QTable:
     arena = policy.extra.get("arena")
     if isinstance(arena, dict) and all(isinstance(arena.get(k), str) for k in ("name", "sha256")):
         meta["arena"] = {"name": arena["name"], "sha256": arena["sha256"]}
+    if policy.algorithm != "q":  # the robot's Dyna-Q model stays with the robot
+        params = {k: policy.learner[k] for k in rt.ALGORITHMS[policy.algorithm]}
+        meta["algorithm"] = {"name": policy.algorithm} | params
     rows = {k: list(v) for k, v in policy.rows.items()}
     return QTable(layout, meta, policy.q_init, rows)
 

@@ -53,6 +53,10 @@ share one table, so an unfinished episode's writes are interleaved with those of
 episodes that finished; each robot journals its own writes (:func:`qkernel.undo_writes`),
 and the discard takes back, newest first, every write of an unfinished episode that no
 other robot has written over since (and drops the rows only they created), then saves.
+
+**Algorithm.** One-step Q only (``learner.algorithm: q``): Q(lambda) and Dyna-Q
+(``docs/learning.md``) are refused with a one-line error, since the compiled loop has
+neither per-robot traces nor a model.
 """
 
 from __future__ import annotations
@@ -66,7 +70,7 @@ import numpy as np
 import pymunk.batch
 
 from .env import KoolioEnv
-from .errors import KoolioError
+from .errors import ConfigError, KoolioError, located
 from .qkernel import (
     EVENTS,
     RESCUE_DRAW,
@@ -284,6 +288,15 @@ class _Run:
             raise KoolioError(
                 "--robots: the many-robot loop runs the ideal world only (its compiled tick "
                 "has no realism models) and this configuration turns realism on: use --robots 1"
+            )
+        if cfg.learner.algorithm != "q":
+            raise ConfigError(
+                located(
+                    f"--robots {robots}",
+                    "learner.algorithm",
+                    f"{cfg.learner.algorithm} learns with one robot only: the compiled "
+                    "many-robot loop (qkernel) has one-step Q only (use --robots 1)",
+                )
             )
         self.env, self.cfg, self.store = env, cfg, store
         self.table, self.log = open_run(env, store, log_path, "koolio-pm train")

@@ -20,11 +20,18 @@ keyword without its action bits (``keyword >> 3``).
     uint64 n_rows
     uint64 state_key[n_rows]         ascending
     float64 q[n_rows][n_actions]
+    bytes   section[...]             only when the header lists ``sections``
     uint32 crc32                     of every byte before it
 
 Reading checks everything, checksum first and then every header field and row (a file
 with a valid checksum but ``episodes: -5`` or a key beyond its layout is refused with a
 one-line :class:`~koolio_pymunk.errors.QTableError` naming the item).
+
+A table learned with an algorithm other than one-step Q records it in the header
+(``algorithm``: its name and parameters) and may carry data sections after the values,
+listed in the header as ``sections: [[name, length], ...]`` (e.g. the Dyna-Q model,
+:mod:`koolio_pymunk.dyna`), covered by the CRC like the rest. A one-step Q table has
+neither key, so its bytes are those of a table written before they existed.
 
 The paper keeps a table file and a backup file, both created empty when missing, read at
 start and written at the end of every episode. :class:`QTableStore` writes each one
@@ -54,7 +61,7 @@ import numpy as np
 from .errors import FileError, QTableError, located
 from .files import atomic_write, file_error, read_bytes, remove_stale_temps
 from .locks import FileLock
-from .robot_runtime import is_number
+from .robot_runtime import field_bits, is_number
 
 MAGIC = b"KOOLIOQT"
 FORMAT_VERSION = 1
@@ -77,11 +84,12 @@ class KeywordLayout:
 
     @property
     def bits(self) -> tuple[int, ...]:
-        return tuple(max(1, math.ceil(math.log2(levels))) for _, levels in self.fields)
+        """Bits of each field: ``max(1, ceil(log2(levels)))``, in integers (exact)."""
+        return tuple(field_bits(levels) for _, levels in self.fields)
 
     @property
     def action_bits(self) -> int:
-        return max(1, math.ceil(math.log2(self.n_actions)))
+        return field_bits(self.n_actions)
 
     @property
     def shifts(self) -> tuple[int, ...]:
@@ -154,6 +162,9 @@ class QTable:
     meta: dict[str, Any] = field(default_factory=dict)
     q_init: float = 0.0
     rows: dict[int, list[float]] = field(default_factory=dict)
+    sections: dict[str, Any] = field(default_factory=dict)
+    """Named data saved after the values: ``bytes``, or an object ``bytes()`` accepts
+    (``__bytes__``), serialized at every save. Read back as ``bytes``."""
 
     def __len__(self) -> int:
         return len(self.rows)
@@ -184,13 +195,20 @@ class QTable:
 
     def copy(self) -> QTable:
         return QTable(
-            self.layout, dict(self.meta), self.q_init, {k: list(v) for k, v in self.rows.items()}
+            self.layout,
+            dict(self.meta),
+            self.q_init,
+            {k: list(v) for k, v in self.rows.items()},
+            {k: bytes(v) for k, v in self.sections.items()},
         )
 
     # -- bytes ----------------------------------------------------------------------
     def to_bytes(self) -> bytes:
         header = dict(self.meta)
         header.update(format=FORMAT_VERSION, layout=self.layout.to_json(), q_init=self.q_init)
+        blobs = [(name, bytes(self.sections[name])) for name in sorted(self.sections)]
+        if blobs:
+            header["sections"] = [[name, len(blob)] for name, blob in blobs]
         hjson = json.dumps(header, sort_keys=True, separators=(",", ":")).encode()
         keys = np.fromiter(sorted(self.rows), dtype="<u8", count=len(self.rows))
         values = np.array([self.rows[int(k)] for k in keys], dtype="<f8").reshape(
@@ -204,6 +222,7 @@ class QTable:
                 struct.pack("<Q", len(keys)),
                 keys.tobytes(),
                 values.tobytes(),
+                *(blob for _, blob in blobs),
             ]
         )
         return body + struct.pack("<I", zlib.crc32(body))
@@ -230,17 +249,33 @@ class QTable:
         except (ValueError, RecursionError) as exc:
             raise bad(f"unreadable header ({_short(exc)})") from None
         layout, q_init = check_header(header, source)
+        listed = header.pop("sections", [])
+        if not isinstance(listed, list) or not all(
+            isinstance(x, list) and len(x) == 2 and isinstance(x[0], str) and _count(x[1])
+            for x in listed
+        ):
+            raise bad("must be [[name, length], ...]", "header.sections")
         pos += hlen
         (n,) = struct.unpack_from("<Q", data, pos)
         pos += 8
         na = layout.n_actions
-        if len(data) - 4 - pos != n * 8 * (1 + na):
+        extra = sum(length for _, length in listed)
+        if len(data) - 4 - pos != n * 8 * (1 + na) + extra:
             raise bad("corrupt or truncated (length does not match the row count)")
         keys = np.frombuffer(data, dtype="<u8", count=n, offset=pos)
         values = np.frombuffer(data, dtype="<f8", count=n * na, offset=pos + 8 * n)
         _check_rows(keys, values, layout, source)
         rows = {int(k): values[i * na : (i + 1) * na].tolist() for i, k in enumerate(keys)}
-        return cls(layout, header, q_init, rows)
+        pos += n * 8 * (1 + na)
+        sections = {}
+        for name, length in listed:
+            sections[name] = data[pos : pos + length]
+            pos += length
+        return cls(layout, header, q_init, rows, sections)
+
+
+def _count(v: Any) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool) and v >= 0
 
 
 def _no_constant(name: str) -> float:
@@ -518,8 +553,8 @@ def check_compatible(
                 located(
                     source,
                     f"sensors.{key}",
-                    f"table made for {_show(theirs.get(key), 80)}, "
-                    f"this run uses {_show(sensors.get(key), 80)}",
+                    f"table made for {_recorded(theirs, key)}, "
+                    f"this run uses {_recorded(sensors, key)}",
                 )
             )
     learned = table.meta.get("arena")
@@ -535,6 +570,12 @@ def check_compatible(
         f"{arena.get('sha256')}); it loads (same sensors), but its policy was learned elsewhere"
     )
     (warn or (lambda msg: print(f"warning: {msg}", file=sys.stderr)))(message)
+
+
+def _recorded(sensors: dict[str, Any], key: str) -> str:
+    """The value of ``key`` in a sensor signature, for a message (a missing key is not
+    ``None``: that could be a value)."""
+    return _show(sensors[key], 80) if key in sensors else "none (not recorded)"
 
 
 def _fmt_layout(layout: KeywordLayout) -> str:

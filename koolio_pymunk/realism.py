@@ -232,10 +232,10 @@ def _check_randomize(cfg: RealismConfig, src: str) -> None:
         if not ok:
             _fail(src, item, f"expected [low, high] (two numbers), got {span!r}")
         if span[0] > span[1]:
-            _fail(src, item, f"low {span[0]!r} exceeds high {span[1]!r}")
+            _fail(src, item, f"low {span[0]:g} exceeds high {span[1]:g}")
         for end, value in zip(("low", "high"), span):  # every bound is monotone: ends suffice
             for _, problem in model_problems(with_values(cfg, {key: value})):
-                _fail(src, item, f"{end} end {value!r}: {problem}")
+                _fail(src, item, f"{end} end {value:g}: {problem}")
     weights = [k for k in table if k.split(".")[-1] in _WEIGHTS]
     if weights:  # all weights drawn at their high ends: z_hit must not go negative
         top = with_values(cfg, {k: table[k][1] for k in weights})

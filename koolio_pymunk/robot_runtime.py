@@ -10,7 +10,10 @@ onto the robot on its own. It reads the policy file written by ``koolio-pm expor
   and 12 of the paper, with the thresholds stored in the file): :meth:`Policy.encode`;
 * chooses actions, greedy or epsilon-greedy: :meth:`Policy.greedy`, :meth:`Policy.act`;
 * applies the Table 11 update from real transitions: :meth:`Policy.update`, with the
-  same floating-point operations as the simulator's learner;
+  same floating-point operations as the simulator's learner; or, when the file's
+  ``learner.algorithm`` says so, Watkins's Q(lambda) (:class:`Traces`) or Dyna-Q
+  (:class:`Model`), the same computations as the simulator's ``qlambda.py`` and
+  ``dyna.py`` given the same transitions and random draws;
 * saves the table atomically in the same format (temporary file, fsync, rename; the
   previous file is kept as ``<file>.bak``), so ``koolio-pm train --init-qtable`` can
   continue learning in simulation from what the robot learned;
@@ -67,6 +70,8 @@ FORMAT = "koolio-policy"
 VERSION = 1
 #: Largest policy file read (a table of a million states is about 300 MiB of JSON).
 MAX_POLICY_BYTES = 1 << 30
+#: Learning algorithms (``learner.algorithm``; absent means ``q``) and their parameters.
+ALGORITHMS = {"q": (), "qlambda": ("trace_decay", "trace_cutoff"), "dyna": ("planning_steps",)}
 #: The paper's five actions; an action's index is the low bits of the keyword.
 ACTION_NAMES = ("Stop", "RotateLeft", "RotateRight", "Forward", "Reverse")
 STOP = 0
@@ -260,7 +265,11 @@ class Policy:
         self.layout = Layout([(f["name"], f["levels"]) for f in lay["fields"]], lay["n_actions"])
         self.encoder = Encoder(doc["encoding"])
         self.sensors: dict[str, Any] = doc["sensors"]
-        self.learner: dict[str, float] = dict(doc.get("learner") or {})
+        self.learner: dict[str, Any] = dict(doc.get("learner") or {})
+        self.algorithm = str(self.learner.get("algorithm", "q"))
+        """``q``, ``qlambda`` or ``dyna`` (the file's ``learner.algorithm``)."""
+        self.model = Model.from_json(doc.get("model")) if self.algorithm == "dyna" else None
+        """Dyna-Q's model of the real transitions (``dyna`` only; saved in the file)."""
         self.rewards: dict[str, float] = dict(doc.get("rewards") or {})
         self.q_init = float(doc["q_init"])
         self.episodes = int(doc["episodes"])
@@ -318,6 +327,8 @@ class Policy:
         }
         doc.update(self.extra)
         doc.update(rows_json(self.rows, self.layout.action_bits))
+        if self.model is not None and self.model.pairs:
+            doc["model"] = self.model.to_json()
         return doc
 
     def save(self, path: str, written_by: str = "robot_runtime", backup: bool = True) -> None:
@@ -459,6 +470,7 @@ _KNOWN_KEYS = frozenset(
         "n_states",
         "entries",
         "greedy",
+        "model",
     )
 )
 
@@ -518,9 +530,15 @@ def validate_document(doc: Any, source: str = "<policy>") -> None:
     * ``sensors``: the simulator's sensor signature (angles, arcs, ranges, thresholds):
       what the table was learned with; ``koolio-pm train --init-qtable`` refuses a file
       whose signature differs from the run's.
-    * ``learner``: ``alpha``, ``gamma``, ``epsilon`` defaults for the robot;
-      ``rewards``: the reward of each event (``goal, end_of_world, bump, stop, reverse,
-      turn, forward``).
+    * ``learner``: ``alpha``, ``gamma``, ``epsilon`` defaults for the robot, and for a
+      learner other than one-step Q its ``algorithm`` (``qlambda``: with
+      ``trace_decay`` in [0, 1] and ``trace_cutoff`` in (0, 1); ``dyna``: with
+      ``planning_steps``, an integer >= 0); ``rewards``: the reward of each event
+      (``goal, end_of_world, bump, stop, reverse, turn, forward``).
+    * ``model`` (``dyna`` only, optional): the robot's model of its real transitions,
+      ``{"pairs": [[state, action, [[next_state, reward, terminal, count], ...]], ...]}``
+      in first-seen order (:class:`Model`). ``koolio-pm export`` writes none: the robot
+      builds its own from real steps.
     * ``q_init``: the value of a Q entry never visited; ``episodes``: episodes learned so
       far (simulation + robot); ``n_states``: number of visited states.
     * ``entries``: ``[{"keyword": K, "q": Q}, ...]``, ascending keywords, every action of
@@ -530,13 +548,11 @@ def validate_document(doc: Any, source: str = "<policy>") -> None:
     if not isinstance(doc, dict):
         raise _err(source, "", "not a policy file (not a JSON object)")
     if doc.get("format") != FORMAT:
-        raise _err(
-            source, "format", "not a {} file (format {!r})".format(FORMAT, doc.get("format"))
-        )
+        raise _err(source, "format", f"not a {FORMAT} file (format {_show(doc.get('format'))})")
     version = doc.get("version")
     if not _is_int(version) or version > VERSION or version < 1:
         raise _err(
-            source, "version", f"unsupported version {version!r} (this reader knows {VERSION})"
+            source, "version", f"unsupported version {_show(version)} (this reader knows {VERSION})"
         )
     for key in ("layout", "encoding", "sensors", "q_init", "episodes", "entries"):
         if key not in doc:
@@ -558,11 +574,44 @@ def validate_document(doc: Any, source: str = "<policy>") -> None:
         raise _err(source, "q_init", "must be a finite number")
     if not _is_int(doc["episodes"]) or not 0 <= doc["episodes"] < 1 << 63:
         raise _err(source, "episodes", "must be an integer >= 0")
-    for key in ("learner", "rewards"):
-        sec = doc.get(key) or {}
-        if not isinstance(sec, dict) or not all(is_number(v) for v in sec.values()):
-            raise _err(source, key, "must map names to finite numbers")
+    sec = doc.get("rewards") or {}
+    if not isinstance(sec, dict) or not all(is_number(v) for v in sec.values()):
+        raise _err(source, "rewards", "must map names to finite numbers")
+    _check_learner(doc.get("learner") or {}, source)
     _check_entries(doc, source)
+    if "model" in doc:
+        if (doc.get("learner") or {}).get("algorithm") != "dyna":
+            raise _err(source, "model", "only a dyna policy has a model")
+        try:
+            Model.from_json(doc["model"])
+        except PolicyError as exc:
+            raise _err(source, "model", str(exc)) from None
+
+
+def _check_learner(sec: Any, source: str) -> None:
+    if not isinstance(sec, dict):
+        raise _err(source, "learner", "must map names to finite numbers")
+    algorithm = sec.get("algorithm", "q")
+    if algorithm not in ALGORITHMS:
+        raise _err(
+            source,
+            "learner.algorithm",
+            f"unknown algorithm {algorithm!r} (valid: {', '.join(ALGORITHMS)})",
+        )
+    for name, v in sec.items():
+        if name != "algorithm" and not is_number(v):
+            raise _err(source, f"learner.{name}", "must be a finite number")
+    ranges = {
+        "trace_decay": (lambda v: 0 <= v <= 1, "must be in [0, 1]"),
+        "trace_cutoff": (lambda v: 0 < v < 1, "must be in (0, 1)"),
+        "planning_steps": (lambda v: _is_int(v) and v >= 0, "must be an integer >= 0"),
+    }
+    for name in ALGORITHMS[algorithm]:
+        if name not in sec:
+            raise _err(source, f"learner.{name}", f"missing (needed by {algorithm})")
+        ok, problem = ranges[name]
+        if not ok(sec[name]):
+            raise _err(source, f"learner.{name}", problem)
 
 
 #: Bounds of a policy's integers (a 64-bit keyword, at most 64 actions, sensors, levels).
@@ -600,12 +649,12 @@ def _check_layout(lay: Any, source: str) -> None:
     for i, f in enumerate(lay["fields"]):
         for key, want in (("bits", expect.bits[i]), ("shift", expect.shifts[i])):
             if key in f and f[key] != want:
-                raise _err(source, f"layout.fields[{i}].{key}", f"{f[key]!r}, expected {want}")
+                raise _err(source, f"layout.fields[{i}].{key}", f"{_show(f[key])}, expected {want}")
     if "action_bits" in lay and lay["action_bits"] != expect.action_bits:
         raise _err(
             source,
             "layout.action_bits",
-            f"{lay['action_bits']!r}, expected {expect.action_bits}",
+            f"{_show(lay['action_bits'])}, expected {expect.action_bits}",
         )
 
 
@@ -643,7 +692,7 @@ def _check_encoding(doc: dict[str, Any], source: str) -> None:
             raise _err(source, f"encoding.thresholds.{name}", "must be increasing, non-empty")
     for g in encoder.sonar_groups:
         if not g or any(not 0 <= i < encoder.n_sonar for i in g):
-            raise _err(source, "encoding.sonar_groups", f"bad group {g!r}")
+            raise _err(source, "encoding.sonar_groups", f"bad group {_show(g)}")
     lay = doc["layout"]
     got = [(str(f["name"]), f["levels"]) for f in lay["fields"]]
     if got != encoder.fields():
@@ -825,6 +874,11 @@ class RobotLearner:
     False runs the greedy policy without updates (``epsilon`` then defaults to 0).
     Outcomes for :meth:`end`: ``goal``, ``end_of_world``, ``truncated`` or
     ``interrupted``, as in the simulator's log.
+
+    The file's ``learner.algorithm`` chooses the learning (:meth:`learn_step`): one-step
+    Q, Q(lambda) with :class:`Traces` (cleared at :meth:`begin` and after a non-greedy
+    choice), or Dyna-Q with the policy's :class:`Model` (saved in the policy file by
+    :meth:`end`, so the next session continues from it).
     """
 
     def __init__(
@@ -846,10 +900,18 @@ class RobotLearner:
         self.learn = learn
         self.goal = goal
         self.state: int | None = None
+        self.traces: Traces | None = None
+        """Q(lambda)'s traces (``qlambda`` only); they live within an episode."""
+        if policy.algorithm == "qlambda":
+            gamma = policy._setting("gamma", None)
+            lam = float(policy.learner["trace_decay"])
+            self.traces = Traces(gamma * lam, float(policy.learner["trace_cutoff"]))
 
     def begin(self, codes: Sequence[int]) -> None:
         """Start an episode from the first state's codes."""
         self.state = self.policy.state_key(codes)
+        if self.traces is not None:
+            self.traces.clear()
         self.reward = 0.0
         self.steps = 0
         self.bumps = 0
@@ -858,7 +920,10 @@ class RobotLearner:
     def choose(self) -> int:
         if self.state is None:
             raise PolicyError("choose: call begin() first")
-        return self.policy.act(self.state, self.epsilon, self.rng)
+        action = self.policy.act(self.state, self.epsilon, self.rng)
+        if self.traces is not None and action not in self.policy.greedy_actions(self.state):
+            self.traces.clear()  # Watkins's cut: an exploratory, non-greedy action
+        return action
 
     def step(
         self,
@@ -874,12 +939,39 @@ class RobotLearner:
             raise PolicyError("step: call begin() first")
         nxt = self.policy.state_key(next_codes)
         if self.learn:
-            self.policy.update(self.state, action, reward, nxt, terminal)
+            self.learn_step(self.state, action, reward, nxt, terminal)
         self.state = nxt
         self.reward += reward
         self.steps += 1
         self.bumps += int(bump)
         self.rescued = self.rescued or rescued
+
+    def moved(self, codes: Sequence[int]) -> None:
+        """The robot was moved by hand (a rescue, after :meth:`step`): the episode goes
+        on from the state of ``codes``, with no update (a person's move is no action of
+        the policy), and is logged as rescued."""
+        if self.state is None:
+            raise PolicyError("moved: call begin() first")
+        self.state = self.policy.state_key(codes)
+        self.rescued = True
+
+    def learn_step(self, state: int, action: int, reward: float, nxt: int, terminal: bool) -> None:
+        """The file's learning algorithm on one transition: Table 11 (``q``), Q(lambda)
+        traces (``qlambda``), or Table 11 then ``planning_steps`` updates drawn from the
+        model with ``2 * planning_steps`` calls of ``rng.random()`` (``dyna``)."""
+        p = self.policy
+        if self.traces is not None:
+            alpha, gamma = p._setting("alpha", None), p._setting("gamma", None)
+            self.traces.update(p, state, action, reward, nxt, terminal, alpha, gamma)
+            return
+        p.update(state, action, reward, nxt, terminal)
+        if p.model is None:
+            return
+        p.model.record(state, action, reward, nxt, terminal)
+        n = int(p.learner["planning_steps"])
+        draws = [self.rng.random() for _ in range(2 * n)]
+        for k in range(0, 2 * n, 2):
+            p.update(*p.model.sample(draws[k], draws[k + 1]))
 
     def end(self, outcome: str) -> None:
         """Finish the episode: count it, write its log row, save the table atomically."""
@@ -901,6 +993,149 @@ class RobotLearner:
         self.state = None
 
 
+class Traces:
+    """Watkins's Q(lambda) eligibility traces: the simulator's ``qlambda.py``, stdlib copy.
+
+    ``entries`` maps a state to ``[action, e]`` (replacing traces: one traced action per
+    state), first traced first. :meth:`update` computes the TD error of one step, sets
+    the step's trace to 1, moves every traced entry by ``alpha * delta * e``, decays the
+    traces by ``decay`` (gamma * lambda) and drops those below ``cutoff``.
+
+    >>> p = {0: [0.0] * 5, 1: [0.0] * 5}
+    >>> class Rows:
+    ...     rows, q_init = p, 0.0
+    ...     def row(self, s): return p[s]
+    >>> t = Traces(0.5, 0.01)
+    >>> t.update(Rows(), 0, 3, 0.0, 1, False, 0.5, 1.0)
+    >>> t.update(Rows(), 1, 3, 8.0, 1, True, 0.5, 1.0)
+    >>> p[1][3], p[0][3]
+    (4.0, 2.0)
+    """
+
+    def __init__(self, decay: float, cutoff: float) -> None:
+        self.decay = decay
+        self.cutoff = cutoff
+        self.entries: dict[int, list] = {}
+
+    def clear(self) -> None:
+        self.entries.clear()
+
+    def update(
+        self,
+        policy: Any,
+        state: int,
+        action: int,
+        reward: float,
+        nxt: int,
+        terminal: bool,
+        alpha: float,
+        gamma: float,
+    ) -> None:
+        rows = policy.rows
+        row = policy.row(state)
+        if terminal:
+            target = reward
+        else:
+            after = rows.get(nxt)
+            target = reward + gamma * (max(after) if after is not None else policy.q_init)
+        step = alpha * (target - row[action])
+        entries = self.entries
+        entries[state] = [action, 1.0]
+        dropped = []
+        for s, tr in entries.items():
+            rows[s][tr[0]] += step * tr[1]
+            tr[1] *= self.decay
+            if tr[1] < self.cutoff:
+                dropped.append(s)
+        for s in dropped:
+            del entries[s]
+
+
+class Model:
+    """Dyna-Q's model: the simulator's ``dyna.Model``, stdlib copy.
+
+    Every (state, action) pair seen, first seen first, with every distinct outcome
+    ``[next_state, reward, terminal, count]``. :meth:`sample` draws a pair uniformly
+    (``int(u1 * n_pairs)``) and an outcome in proportion to its count (the first whose
+    cumulative count exceeds ``u2 * total``).
+
+    >>> m = Model()
+    >>> m.record(5, 3, -0.5, 6, False); m.record(5, 3, -5.0, 7, False)
+    >>> m.sample(0.0, 0.2), m.sample(0.0, 0.9)
+    ((5, 3, -0.5, 6, False), (5, 3, -5.0, 7, False))
+    """
+
+    def __init__(self) -> None:
+        self.pairs: list[tuple[int, int]] = []
+        self.outcomes: list[list[list]] = []
+        self.totals: list[int] = []
+        self._index: dict[tuple[int, int], int] = {}
+
+    def record(self, state: int, action: int, reward: float, nxt: int, terminal: bool) -> None:
+        i = self._index.get((state, action))
+        if i is None:
+            i = len(self.pairs)
+            self._index[(state, action)] = i
+            self.pairs.append((state, action))
+            self.outcomes.append([])
+            self.totals.append(0)
+        for out in self.outcomes[i]:
+            if out[0] == nxt and out[1] == reward and out[2] == terminal:
+                out[3] += 1
+                break
+        else:
+            self.outcomes[i].append([nxt, reward, terminal, 1])
+        self.totals[i] += 1
+
+    def sample(self, u1: float, u2: float) -> tuple[int, int, float, int, bool]:
+        i = int(u1 * len(self.pairs))
+        x = u2 * self.totals[i]
+        seen = 0
+        for out in self.outcomes[i]:
+            seen += out[3]
+            if x < seen:
+                break
+        state, action = self.pairs[i]
+        return state, action, out[1], out[0], out[2]
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "pairs": [
+                [s, a, [[o[0], o[1], o[2], o[3]] for o in outs]]
+                for (s, a), outs in zip(self.pairs, self.outcomes)
+            ]
+        }
+
+    @classmethod
+    def from_json(cls, data: Any) -> Model:
+        """A model from its JSON form (None: an empty model); PolicyError when malformed."""
+        model = cls()
+        if data is None:
+            return model
+        pairs = data.get("pairs") if isinstance(data, dict) else None
+        if not isinstance(pairs, list):
+            raise PolicyError("pairs: must be a list")
+        for i, item in enumerate(pairs):
+            ok = isinstance(item, list) and len(item) == 3 and isinstance(item[2], list)
+            ok = ok and _is_int(item[0]) and _is_int(item[1]) and bool(item[2])
+            if not ok or (item[0], item[1]) in model._index:
+                raise PolicyError(f"pairs[{i}]: expected a new [state, action, [outcome, ...]]")
+            model._index[(item[0], item[1])] = i
+            model.pairs.append((item[0], item[1]))
+            outs = []
+            for o in item[2]:
+                good = isinstance(o, list) and len(o) == 4 and _is_int(o[0])
+                good = good and is_number(o[1]) and isinstance(o[2], bool)
+                if not good or not _is_int(o[3]) or o[3] < 1:
+                    raise PolicyError(
+                        f"pairs[{i}]: an outcome is [next_state, reward, terminal, count >= 1]"
+                    )
+                outs.append([o[0], float(o[1]), o[2], o[3]])
+            model.outcomes.append(outs)
+            model.totals.append(sum(o[3] for o in outs))
+        return model
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """``python robot_runtime.py POLICY``: check a policy file and print a summary."""
     args = list(sys.argv[1:] if argv is None else argv)
@@ -918,6 +1153,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(f"{args[0]}: {FORMAT} version {VERSION}, {len(p.rows)} states, {p.episodes} episodes")
     print(f"keyword ({lay.total_bits} bits): {keyword} | Action")
     print(f"sonar thresholds {enc.sonar_thresholds}, camera thresholds {enc.camera_thresholds}")
+    params = ", ".join(f"{k} {p.learner[k]}" for k in ALGORITHMS[p.algorithm])
+    model = f", model of {len(p.model.pairs)} pairs" if p.model is not None else ""
+    print(f"learner: {p.algorithm}" + (f" ({params})" if params else "") + model)
     return 0
 
 

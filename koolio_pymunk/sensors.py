@@ -359,6 +359,15 @@ class SensorSuite:
         """No wall segment between the centre ``(x, y)`` and ``target``."""
         return self.engine.line_of_sight(x, y, target[0], target[1])
 
+    def camera_target(
+        self, pose: tuple[float, float, float], camera: int, targets: Sequence[Point]
+    ) -> int:
+        """Index in ``targets`` of the nearest one camera ``camera`` has in its arc and in
+        sight at ``pose`` (noise-free, no realism), or -1: what the viewer draws a missed
+        or misread camera's line to."""
+        x, y, h = pose
+        return self._camera_distance(x, y, h + float(self.camera_dirs[camera]), targets)[1]
+
     def _camera_distance(
         self, x: float, y: float, direction: float, targets: Sequence[Point]
     ) -> tuple[float, int]:

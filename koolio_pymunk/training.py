@@ -38,7 +38,7 @@ from .config import Config
 from .env import KoolioEnv
 from .episode_log import LOG_FIELDS as LOG_FIELDS  # the log's columns, re-exported
 from .episode_log import LogWriter, check_log_path
-from .learner import QLearner
+from .learner import QLearner, attach, make_learner
 from .qtable import QTable, QTableStore, load_qtable
 
 #: Seed streams: training and evaluation episodes of the same seed never share starts.
@@ -121,7 +121,7 @@ def run_episode(
         action = agent.act(state)
         nxt, reward, terminated, truncated = env.transition(action)
         if learn:  # paper §5.4.8: update, then the rescue check (done by the env)
-            agent.update(state, action, reward, nxt, terminated)
+            agent.observe(state, action, reward, nxt, terminated)
         state = env.state_key
         if terminated:
             return env.episode_reward, env.steps, env.judgement.event  # type: ignore[union-attr]
@@ -231,6 +231,7 @@ def open_run(
         table = store.load(
             env.layout, sensor_signature(cfg), cfg.learner.q_init, arena_record(env.arena)
         )
+        attach(table, cfg.learner, str(store.path))  # the run's learning algorithm
         log = LogWriter(
             log_path,
             int(table.meta.get("episodes", 0)),
@@ -275,7 +276,7 @@ def train(
     first = int(table.meta.get("episodes", 0))
     progress = Progress()
     results: list[EpisodeResult] = []
-    agent = QLearner(table, cfg.learner, np.random.default_rng(seed))
+    agent = make_learner(table, cfg.learner, np.random.default_rng(seed), str(store.path))
     last_report = time.perf_counter()
     interrupted = False
     try:
@@ -287,8 +288,8 @@ def train(
                         if report:
                             report("interrupted between episodes: nothing unfinished")
                         break
-                    env_seed, agent.rng = episode_seeds(seed, e)
-                    agent.set_episode(e)
+                    env_seed, rng = episode_seeds(seed, e)
+                    agent.begin_episode(e, rng)
                     env.reset(seed=env_seed)
                     reward, steps, outcome = run_episode(env, agent, True, stop=guard.check)
                     res = EpisodeResult(

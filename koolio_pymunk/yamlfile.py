@@ -7,14 +7,21 @@ One loader for every YAML file the project reads:
   PyYAML, needs a dot and reads them as strings);
 * aliases (``*name``) are refused: a few lines of aliases can stand for billions of
   nodes;
+* control characters (a binary file that happens to be UTF-8) are refused with their
+  line;
 * bounded: a file larger than its kind's limit, nesting deeper than :data:`MAX_DEPTH`,
   or a number of more digits than Python converts (4300) is refused with a one-line
   error, in bounded time and memory.
 
 Every problem is one line ``source: line N: problem`` of the caller's error class.
 
+:func:`dump_yaml` writes with the same rule, so a string that the reader would take for a
+number (a goal named ``1e3``) is quoted and reads back as the string it was.
+
 >>> parse_yaml("a: 1e-9\\nb: [1, 2]", "demo.yaml")
 {'a': 1e-09, 'b': [1, 2]}
+>>> parse_yaml(dump_yaml({"name": "1e3"}), "demo.yaml")
+{'name': '1e3'}
 >>> parse_yaml("a: 1\\na: 2", "demo.yaml")
 Traceback (most recent call last):
 ...
@@ -88,6 +95,19 @@ SafeLoader.add_constructor(
 SafeLoader.add_implicit_resolver("tag:yaml.org,2002:float", _FLOAT_12, list("-+0123456789."))
 
 
+class SafeDumper(yaml.SafeDumper):
+    """``yaml.SafeDumper`` that quotes every string :class:`SafeLoader` reads as a number."""
+
+
+SafeDumper.add_implicit_resolver("tag:yaml.org,2002:float", _FLOAT_12, list("-+0123456789."))
+
+
+def dump_yaml(data: object, **options: object) -> str:
+    """YAML text of ``data`` that :func:`parse_yaml` reads back as ``data``
+    (``options``: those of ``yaml.dump``, e.g. ``sort_keys=False``)."""
+    return yaml.dump(data, Dumper=SafeDumper, **options)  # type: ignore[call-overload]
+
+
 def _fail(error: type[KoolioError], source: str, item: str, problem: str) -> NoReturn:
     raise error(located(source, item, problem).replace("\n", " "))
 
@@ -96,6 +116,10 @@ def parse_yaml(text: str, source: str, error: type[KoolioError] = KoolioError) -
     """Parse YAML ``text``; any problem is a one-line ``error``."""
     try:
         return yaml.load(text, Loader=SafeLoader)
+    except yaml.reader.ReaderError as exc:  # a control character: a binary file
+        line = text.count("\n", 0, exc.position) + 1
+        char = exc.character if isinstance(exc.character, int) else ord(exc.character)
+        _fail(error, source, f"line {line}", f"control character U+{char:04X}: not a text file")
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         where = f"line {mark.line + 1}" if mark is not None else ""

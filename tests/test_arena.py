@@ -493,7 +493,7 @@ def test_atomic_save_keeps_old_file(tmp_path: Path, monkeypatch: pytest.MonkeyPa
     def boom(*args: object, **kwargs: object) -> str:
         raise RuntimeError("serialisation failed")
 
-    monkeypatch.setattr(yaml, "safe_dump", boom)
+    monkeypatch.setattr(yaml, "dump", boom)  # what yamlfile.dump_yaml calls
     with pytest.raises(RuntimeError):
         save_arena(arena, path)
     assert path.read_text() == before
@@ -539,3 +539,12 @@ def test_to_world_rotates_clockwise_5_degrees(tmp_path: Path) -> None:
     assert world.start.heading_deg == 85.0
     assert world.rotate_deg == 0.0
     assert world.walls[1][0] == pytest.approx(200 * 0.9961946980917455 - 200 * 0.0871557427476582)
+
+
+@pytest.mark.parametrize("change", [_drop("end_of_world"), _set(("end_of_world",), [])])
+def test_an_arena_without_end_of_world_markers_is_valid(
+    tmp_path: Path, change: Callable[[dict], None]
+) -> None:
+    """The paper: "any number" of end-of-world markers; none makes a closed room."""
+    arena = load_arena(write(tmp_path, variant(change)))
+    assert arena.end_of_world == ()

@@ -11,66 +11,35 @@ from __future__ import annotations
 
 import csv
 import errno
-import hashlib
 import json
 import os
 import shutil
 import signal
-import struct
 import subprocess
 import sys
 import textwrap
 import time
-import zlib
 from pathlib import Path
 
 import pytest
+from inputs import edit_header, expect_error
 
 from koolio_pymunk import cli
 from koolio_pymunk import files as files_mod
 from koolio_pymunk import robot_runtime as rt
-from koolio_pymunk.errors import InUseError, KoolioError
+from koolio_pymunk.errors import InUseError
 from koolio_pymunk.locks import FileLock
-from koolio_pymunk.qtable import MAGIC, QTableStore, load_qtable
+from koolio_pymunk.qtable import QTableStore, load_qtable
 
 TINY = "episode: {max_steps: 30}\n"
 ROOT = Path(__file__).resolve().parents[1]
 
 
 # -- helpers ------------------------------------------------------------------------------
-def snapshot(folder: Path) -> dict[str, str]:
-    """Hash of every file under ``folder`` (lock files aside: they hold only a note)."""
-    out = {}
-    for p in sorted(folder.rglob("*")):
-        if p.is_file() and not p.name.endswith(".lock"):
-            with open(p, "rb") as fh:  # not Path.read_bytes: some tests patch it
-                out[str(p.relative_to(folder))] = hashlib.sha256(fh.read()).hexdigest()
-    return out
-
-
 def run_cli(capsys, *argv: str) -> tuple[int, str, str]:
     code = cli.main(list(argv))
     out, err = capsys.readouterr()
     return code, out, err
-
-
-def expect_error(capsys, folder: Path, argv: list[str], *words: str) -> str:
-    """Run ``koolio-pm argv`` in ``folder``: exit 2, one error line holding ``words``, no
-    file changed. Returns the line."""
-    before = snapshot(folder)
-    try:
-        code = cli.main(argv)
-    except SystemExit as exc:  # argparse
-        code = exc.code
-    _, err = capsys.readouterr()
-    lines = err.strip().splitlines()
-    assert code == 2, (argv, err)
-    assert len(lines) == 1 and lines[0].startswith("koolio-pm: error: "), err
-    assert "Traceback" not in err
-    for w in words:
-        assert w in lines[0], lines[0]
-    assert snapshot(folder) == before, f"{argv} changed files"
-    return lines[0]
 
 
 def log_numbers(path: Path) -> tuple[list[int], list[int]]:
@@ -86,22 +55,6 @@ def agree(table: Path, log: Path) -> None:
     """The log holds each of the table's episodes once, in order."""
     done, _ = log_numbers(log)
     assert done == list(range(load_qtable(table).meta["episodes"]))
-
-
-def with_header(src: Path, dst: Path, **changes: object) -> None:
-    """A copy of a table file with header fields changed and a valid checksum."""
-    raw = src.read_bytes()
-    (hlen,) = struct.unpack_from("<I", raw, 8)
-    header = json.loads(raw[12 : 12 + hlen])
-    for key, value in changes.items():
-        node = header
-        parts = key.split(".")
-        for part in parts[:-1]:
-            node = node[part]
-        node[parts[-1]] = value
-    hjson = json.dumps(header).encode()
-    body = MAGIC + struct.pack("<I", len(hjson)) + hjson + raw[12 + hlen : -4]
-    dst.write_bytes(body + struct.pack("<I", zlib.crc32(body)))
 
 
 @pytest.fixture(scope="module")
@@ -512,7 +465,7 @@ def test_paths_that_cannot_be_files(work, capsys, argv, words):
     ],
 )
 def test_table_headers_with_a_valid_checksum_are_checked(work, capsys, changes, words):
-    with_header(work / "q.qtable", work / "h.qtable", **changes)
+    (work / "h.qtable").write_bytes(edit_header((work / "q.qtable").read_bytes(), **changes))
     for argv in (
         ["eval", "--arena", "room", "--config", "tiny.yaml", "--qtable", "h.qtable"],
         ["info", "--qtable", "h.qtable"],
@@ -719,74 +672,6 @@ def test_a_runtime_log_refuses_a_file_that_is_not_a_log(work):
     with pytest.raises(rt.PolicyError, match="not a training log"):
         rt.EpisodeLog("room.yaml")
     assert (work / "room.yaml").read_bytes() == before
-
-
-# == fuzz ======================================================================================
-def _mutations(text: str, rng, count: int) -> list[str]:
-    """``count`` random edits of ``text``: characters dropped, inserted, replaced by
-    numbers too long, nesting, null bytes; spans duplicated or cut."""
-    tokens = ["[", "]", "{", "}", ":", ",", "-", "#", "&a", "*a", "!", "'", '"', "\n",
-              " ", "9" * 400, "1e999", "-1e-9", ".nan", "null", "~", "\x00", "\xff",
-              "[" * 70]  # fmt: skip
-    out = []
-    for _ in range(count):
-        t = text
-        for _ in range(rng.randint(1, 4)):
-            i = rng.randrange(len(t) + 1)
-            k = rng.randrange(4)
-            if k == 0:
-                t = t[:i] + t[i + rng.randint(1, 30) :]
-            elif k == 1:
-                t = t[:i] + rng.choice(tokens) + t[i:]
-            elif k == 2:
-                j = rng.randrange(len(t) + 1)
-                a, b = min(i, j), max(i, j)
-                t = t[:a] + t[a:b] * 2 + t[b:]
-            else:
-                t = t[:i] + rng.choice(tokens) + t[i + 1 :]
-        out.append(t)
-    return out
-
-
-def _only_our_errors(load, path) -> str:
-    try:
-        load(path)
-    except (KoolioError, rt.PolicyError):
-        return "refused"
-    return "loaded"
-
-
-def test_fuzz_the_loaders(work):
-    """Random mutations of the shipped arena, configuration, table header and policy: every
-    outcome is a load or one of the project's own errors (200 of each, seeded)."""
-    import random
-
-    from koolio_pymunk.arena import load_arena
-    from koolio_pymunk.config import load_config
-    from koolio_pymunk.export import load_any_table
-
-    rng = random.Random(2008)
-    outcomes: dict[str, set[str]] = {}
-    sources = {
-        "arena": (ARENA, lambda p: load_arena(str(p))),
-        "config": ((ROOT / "koolio_pymunk/profiles/paper.yaml").read_text(), load_config),
-        "policy": ((work / "p.json").read_text(), lambda p: rt.Policy.load(str(p))),
-        "policy-sim": ((work / "p.json").read_text(), load_any_table),
-    }
-    for kind, (text, load) in sources.items():
-        path = work / f"fuzz-{kind}.{'json' if 'policy' in kind else 'yaml'}"
-        for variant in _mutations(text, rng, 200):
-            path.write_bytes(variant.encode("utf-8", "surrogatepass"))
-            outcomes.setdefault(kind, set()).add(_only_our_errors(load, path))
-    raw = (work / "q.qtable").read_bytes()
-    (hlen,) = struct.unpack_from("<I", raw, 8)
-    header = raw[12 : 12 + hlen].decode()
-    for variant in _mutations(header, rng, 200):
-        hjson = variant.encode("utf-8", "surrogatepass")
-        body = MAGIC + struct.pack("<I", len(hjson)) + hjson + raw[12 + hlen : -4]
-        (work / "f.qtable").write_bytes(body + struct.pack("<I", zlib.crc32(body)))
-        outcomes.setdefault("table", set()).add(_only_our_errors(load_qtable, "f.qtable"))
-    assert all(v == {"refused", "loaded"} for v in outcomes.values()), outcomes
 
 
 def test_a_store_releases_its_lock_when_closed(tmp_path):

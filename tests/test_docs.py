@@ -9,13 +9,15 @@ command finds the files an earlier one wrote. How each kind of command is run:
 
 * ``koolio-pm ...`` (also ``.venv/bin/koolio-pm``, with ``VAR=value`` prefixes): the real
   ``koolio_pymunk.cli.main`` with the budget cut: ``train`` 2 episodes, ``eval`` 1,
+  ``transfer`` 2 training and 2 robot episodes with a 1-episode check after each,
   ``view`` 3 steps or 1 episode with screenshots every step, ``sweep`` on a copy of its
   spec cut to 1 configuration x 1 seed x 2 episodes (the documented spec itself is read
   by ``--dry-run``), each sweep into a fresh output folder so that none merely resumes;
   ``--ray`` and ``--ray auto`` use one Ray instance the test starts; ``edit`` and
   ``tools/arena_editor.py`` get ``--screenshot`` so the window closes; a synopsis's
   ``[--flag VALUE]`` runs with the flag;
-* ``python tools/X.py``: the script itself (``view_bench.py``: 2 episodes, 1 repeat);
+* ``python tools/X.py``: the script itself (``view_bench.py``: 2 episodes, 1 repeat;
+  ``learning_targets.py``: seed 0 and a budget of 5 episodes); a ``nice`` prefix is dropped;
 * ``koolio-pm edit``, ``tools/arena_editor.py`` and ``python .../robot_runtime.py``: a
   separate interpreter (``-I`` for the runtime: as on the robot); ``scp FILES
   robot:DIR/`` copies them into the folder ``robot/DIR`` where the robot's commands run;
@@ -73,10 +75,11 @@ def shell_blocks(text: str) -> list[str]:
 
 
 def documented_commands(page: str) -> list[list[str]]:
-    """The commands of ``page``'s shell blocks: argument lists, ``&&`` chains split."""
+    """The commands of ``page``'s shell blocks: argument lists, ``&&`` chains split, lines
+    ending in a backslash joined to the next (as the shell does)."""
     out = []
     for block in shell_blocks((REPO / page).read_text()):
-        for line in block.splitlines():
+        for line in block.replace("\\\n", " ").splitlines():
             words = shlex.split(line, comments=True)
             while words:
                 part = words[: words.index("&&")] if "&&" in words else words
@@ -90,6 +93,18 @@ def _editor_script() -> str:
     text = (REPO / "docs" / "editor.md").read_text()
     start = text.index("new lab\n")
     return text[start : text.index("```", start)]
+
+
+#: What ``tools/learning_targets.py`` gets in the docs test: a seed and a few episodes.
+LEARNING_TARGETS_BUDGET = (
+    ("--seeds", "0"),
+    ("--workers", "1"),
+    ("--every", "5"),
+    ("--max-episodes", "5"),
+    ("--paper-episodes", "5"),
+    ("--paper-every", "5"),
+    ("--random-episodes", "5"),
+)
 
 
 def _set(args: list[str], flag: str, value: str) -> list[str]:
@@ -120,6 +135,8 @@ class Reader:
             key, _, value = words.pop(0).partition("=")
             env[key] = value
         assert env in ({}, {"SDL_VIDEODRIVER": "dummy"}), env
+        if words[:1] == ["nice"]:
+            words = words[1:]
         program, args = words[0], words[1:]
         if program.endswith("koolio-pm"):
             return self.koolio_pm(_fill_synopsis(args))
@@ -157,6 +174,10 @@ class Reader:
             return self.subprocess(["-m", "koolio_pymunk", *self.editor_args(args)])
         elif command == "plot":
             self.supply_logs(args)
+        elif command == "transfer":
+            for flag, value in (("--episodes", "2"), ("--robot-episodes", "2")):
+                args = _set(args, flag, value)
+            args = _set(_set(args, "--eval-episodes", "1"), "--eval-every", "1")
         try:
             status = cli.main(args)
         except SystemExit as exc:  # argparse refused the command line
@@ -211,6 +232,10 @@ class Reader:
             return self.subprocess([script, *self.editor_args(["edit", *args[1:]])[1:]])
         if script == "tools/view_bench.py":
             args = _set(_set(args, "--episodes", "2"), "--repeat", "1")
+            return self.script(REPO / script, args[1:])
+        if script == "tools/learning_targets.py":  # one seed, a budget of a few episodes
+            for flag, value in LEARNING_TARGETS_BUDGET:
+                args = _set(args, flag, value)
             return self.script(REPO / script, args[1:])
         if script.endswith("robot_runtime.py"):
             where = self.robot if script == "robot_runtime.py" else self.folder

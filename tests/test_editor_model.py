@@ -412,3 +412,9 @@ def test_blank_arena() -> None:
     assert m.arena == Arena("untitled", (), (), (), Start((0, 0)), source="<untitled>")
     assert m.problem().message == "<untitled>: walls: fewer than 3 points (0): not a closed polygon"
     assert m.problem().paths == (("walls",),) and m.dirty
+
+
+def test_deleting_the_last_marker_leaves_a_valid_closed_room() -> None:
+    m = room()
+    m.delete(("end_of_world", 0))
+    assert m.arena.end_of_world == () and m.problem() is None

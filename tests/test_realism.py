@@ -425,7 +425,7 @@ def test_many_robots_refuse_realism_with_one_line(tmp_path, capsys) -> None:
         ("realism: {randomize: {sonar.z_hit: [0, 1]}}", "randomize.sonar.z_hit", "not a rand"),
         ("realism: {randomize: {camera.misread: [0, 2]}}", "camera.misread", "high end 2"),
         ("realism: {randomize: {sonar.sigma_hit: [3, 1]}}", "sigma_hit", "low 3 exceeds"),
-        ("realism: {randomize: {sonar.sigma_hit: 3}}", "sigma_hit", "expected [low, high]"),
+        ("realism: {randomize: {sonar.sigma_hit: 3}}", "sigma_hit", "expected a list, got 3"),
         ("realism: {sonr: {}}", "realism.sonr", "did you mean 'sonar'"),
     ],
 )

@@ -180,6 +180,27 @@ def test_greedy_learner_does_not_update_or_save(policy_file, tmp_path):
     assert p.rows == before and not (tmp_path / "x.json").exists()
 
 
+def test_moved_continues_from_the_new_state_without_an_update(policy_file, tmp_path):
+    """A rescue by hand: the episode goes on from the new state, nothing is learned from
+    the move, and the log row says rescued."""
+    p = rt.Policy.load(str(policy_file))
+    a_state, b_state = sorted(p.rows)[:2]
+    a_codes, b_codes = p.layout.decode(a_state << 3)[0], p.layout.decode(b_state << 3)[0]
+    learner = rt.RobotLearner(p, log_path=str(tmp_path / "robot.csv"), seed=1)
+    with pytest.raises(rt.PolicyError, match="moved: call begin"):
+        learner.moved(b_codes)
+    learner.begin(a_codes)
+    learner.step(3, -0.5, a_codes, False)
+    before = {k: list(v) for k, v in p.rows.items()}
+    learner.moved(b_codes)
+    assert learner.state == b_state and p.rows == before
+    learner.step(3, -0.5, a_codes, False)  # the update is of the state moved to
+    assert p.rows[b_state][3] != before[b_state][3] and p.rows[a_state] == before[a_state]
+    learner.end("truncated")
+    row = (tmp_path / "robot.csv").read_text().splitlines()[1].split(",")
+    assert row[4:6] == ["truncated", "1"]
+
+
 @pytest.mark.parametrize(
     ("call", "message"),
     [

@@ -426,3 +426,22 @@ def test_greedy_session_watches_the_episodes_of_eval(tmp_path, config) -> None:
     assert sum(steps) / 3 == pytest.approx(ev.mean_steps)
     assert session.stats.reward_sum / 3 == pytest.approx(ev.mean_reward)
     assert session.stats.goals / 3 == pytest.approx(ev.goal_rate)
+
+
+def test_world_profile_in_the_panel_and_over_the_arena(tmp_path, config) -> None:
+    """A realistic world is named over the arena view (a tag) and in the control panel
+    with the models it turns on; the ideal world adds neither."""
+    env = KoolioEnv("room", config=config, world="koolio-real-dr")
+    app = ViewerApp(Session(env, tmp_path / "q.qtable", seed=1, log=tmp_path / "log.csv"))
+    app.draw()
+    assert "WORLD: KOOLIO-REAL-DR" in app.drawn["tags"]
+    lines = app.info_lines()
+    i = next(k for k, line in enumerate(lines) if line.startswith("world: koolio-real-dr "))
+    assert lines[i + 1 : i + 3] == [
+        "realism: sonar, camera, motion",
+        "randomized: 11 parameters per episode",
+    ]
+    ideal = make_app(tmp_path / "ideal", config)
+    ideal.draw()
+    assert not any(t.startswith("WORLD") for t in ideal.drawn["tags"])
+    assert not any(line.startswith(("realism", "randomized")) for line in ideal.info_lines())

@@ -11,6 +11,9 @@ Sections (each printed as a table row, all written to ``--out`` as JSON):
 * **train (end to end)**: :func:`training.train` as ``koolio-pm train`` runs it, saving
   the table (file + backup, fsynced) and the log at every episode end;
 * **N robots**: :func:`multi.train_many` with ``--robots`` robots, robot-steps per second;
+* **algorithms**: the fast single-robot loop with each ``learner.algorithm`` (one-step Q,
+  Q(lambda), Dyna-Q with its default ``planning_steps``), the same number of steps from an
+  empty table in this one run: the cost per step and its ratio to one-step Q's;
 * **time to competence**, per seed: default ``koolio-pm train`` (hallway, default
   config), a greedy evaluation of 100 episodes after every ``--check-every`` episodes,
   until at least 90 % reach the goal; each seed runs in its own process, which also
@@ -28,6 +31,7 @@ stretch wall time, and the CPU figure is the one to compare between runs.
 
     .venv/bin/python tools/bench.py --out bench.json         # a few minutes
     .venv/bin/python tools/bench.py --quick                   # about a minute
+    .venv/bin/python tools/bench.py --algorithms-only         # the algorithms section only
 """
 
 from __future__ import annotations
@@ -71,38 +75,73 @@ def rates(steps: int, t: Timer) -> dict:
     }
 
 
-def make_env(backend: str, arena: str = "hallway", world: str | None = None):
+def make_env(backend: str, arena: str = "hallway", world: str | None = None, algorithm: str = "q"):
     from koolio_pymunk.config import load_config
     from koolio_pymunk.env import KoolioEnv
 
-    cfg = load_config(overrides={"sensors": {"backend": backend}}, world=world)
-    return KoolioEnv(arena, config=cfg)
+    overrides = {"sensors": {"backend": backend}, "learner": {"algorithm": algorithm}}
+    return KoolioEnv(arena, config=load_config(overrides=overrides, world=world))
 
 
-def learning_loop(backend: str, min_steps: int, seed: int = 0, world: str | None = None) -> dict:
+def learning_loop(
+    backend: str, min_steps: int, seed: int = 0, world: str | None = None, algorithm: str = "q"
+) -> dict:
     """The training loop of ``train`` without file I/O, for at least ``min_steps`` steps."""
     import numpy as np
 
-    from koolio_pymunk.learner import QLearner
+    from koolio_pymunk.learner import make_learner
     from koolio_pymunk.qtable import QTable
     from koolio_pymunk.training import episode_seeds, run_episode
 
-    env = make_env(backend, world=world)
+    env = make_env(backend, world=world, algorithm=algorithm)
     table = QTable(env.layout, {}, env.config.learner.q_init)
-    agent = QLearner(table, env.config.learner, np.random.default_rng(seed))
+    agent = make_learner(table, env.config.learner, np.random.default_rng(seed))
     env.reset(seed=0)
     env.transition(0)  # compile / warm up
     steps, e = 0, 0
     with Timer() as t:
         while steps < min_steps:
-            env_seed, agent.rng = episode_seeds(seed, e)
-            agent.set_episode(e)
+            env_seed, rng = episode_seeds(seed, e)
+            agent.begin_episode(e, rng)
             env.reset(seed=env_seed)
             steps += run_episode(env, agent, learn=True)[1]
             e += 1
     out = rates(steps, t)
     out["episodes"] = e
     return out
+
+
+def algorithms(min_steps: int) -> dict:
+    """Each learning algorithm in the fast loop; cost per step and ratio to one-step Q."""
+    out = {}
+    for name in ("q", "qlambda", "dyna"):
+        r = learning_loop("fast", min_steps, seed=0, algorithm=name)
+        r["us_per_step_cpu"] = round(1e6 * r["cpu_s"] / max(1, r["steps"]), 2)
+        out[name] = r
+    base = out["q"]["us_per_step_cpu"]
+    for r in out.values():
+        r["ratio_to_q_cpu"] = round(r["us_per_step_cpu"] / base, 2)
+    return out
+
+
+def algorithms_section(quick: bool) -> dict:
+    """Run and print the algorithms section."""
+    algos = algorithms(30_000 if quick else 150_000)
+    print("  cost per step of each learner.algorithm (fast loop, same steps, this run):")
+    for name, r in algos.items():
+        print(
+            f"    {name:<8} x{r['ratio_to_q_cpu']:.2f} one-step Q  "
+            f"{r['us_per_step_cpu']:6.1f} us/step  {r['per_cpu_s']:>8,} steps/CPU s  "
+            f"({r['steps']:,} steps, {r['episodes']} episodes)"
+        )
+    return algos
+
+
+def _write(report: dict, out: str | None) -> int:
+    if out:
+        Path(out).write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
+        print(f"wrote {out}")
+    return 0
 
 
 def end_to_end(episodes: int, folder: Path) -> dict:
@@ -285,6 +324,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--check-every", type=int, default=100)
     p.add_argument("--max-episodes", type=int, default=3000)
     p.add_argument("--eval-episodes", type=int, default=100)
+    p.add_argument(
+        "--algorithms-only", action="store_true", help="only the cost per step of each algorithm"
+    )
     p.add_argument("--competence-seed", type=int, default=None, help=argparse.SUPPRESS)
     p.add_argument("--folder", default=None, help=argparse.SUPPRESS)
     args = p.parse_args(argv)
@@ -307,6 +349,9 @@ def main(argv: list[str] | None = None) -> int:
         f"koolio-pymunk bench ({'quick' if q else 'full'}), {report['machine']['cpus']} CPUs, "
         f"load average {report['machine']['load_average']}"
     )
+    if args.algorithms_only:
+        report["algorithms"] = algorithms_section(q)
+        return _write(report, args.out)
     print(f"  {'':<34} {'per wall s':>10} {'per CPU s':>10}")
     with tempfile.TemporaryDirectory(dir=ROOT) as tmp:
         folder = Path(tmp)
@@ -326,6 +371,8 @@ def main(argv: list[str] | None = None) -> int:
         multi = many(args.robots, 300 if q else 3000, folder)
         print(table_line(f"{args.robots} robots robot-steps/s", multi))
         report.update(reference=ref, fast=fast, koolio_real=real, end_to_end=e2e, many=multi)
+
+        report["algorithms"] = algorithms_section(q)
 
         comp = []
         for s in seeds:
@@ -370,10 +417,7 @@ def main(argv: list[str] | None = None) -> int:
     report["peak_rss_bench_mib"] = round(
         resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1
     )
-    if args.out:
-        Path(args.out).write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
-        print(f"wrote {args.out}")
-    return 0
+    return _write(report, args.out)
 
 
 if __name__ == "__main__":

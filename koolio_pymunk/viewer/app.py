@@ -568,6 +568,7 @@ class ViewerApp:
             "mode: " + ("learning" if s.learn else "greedy (read-only table)"),
             f"arena: {self.env.arena.name}   seed: {s.seed}",
             f"world: {self.env.world_name}   config: {self.config_name}",
+            *realism_lines(self.env.config),
             "table: " + table,
             "log: " + (str(s.log.path) if s.log.path else "none"),
         ]
@@ -910,6 +911,8 @@ class ViewerApp:
             out.append("RESCUED")
         if not s.learn:
             out.append("GREEDY")
+        if env.world_name != "ideal":
+            out.append(f"WORLD: {Path(env.world_name).stem.upper()}")
         if s.done:
             out.append("DONE")
         elif not self.running:
@@ -1179,6 +1182,31 @@ class _ControlsBuilder:
                 break
             text = _short_to(line, self.w, app.style)
             self.label(text, 19, 0, "#info")
+
+
+def realism_lines(cfg: Any) -> list[str]:
+    """The realism models a world turns on, and whether it randomizes them: the control
+    panel's lines under ``world:`` (none in the ideal world; the models and their values
+    are in ``docs/reality-gap.md``).
+
+    >>> from koolio_pymunk.config import load_config
+    >>> realism_lines(load_config(world="koolio-real-dr"))
+    ['realism: sonar, camera, motion', 'randomized: 11 parameters per episode']
+    >>> realism_lines(load_config())
+    []
+    """
+    from ..realism import camera_on, motion_on, sonar_on
+
+    r = cfg.realism
+    groups = [
+        name
+        for name, on in (("sonar", sonar_on(r)), ("camera", camera_on(r)), ("motion", motion_on(r)))
+        if on
+    ]
+    out = ["realism: " + ", ".join(groups)] if groups else []
+    if r.randomize:
+        out.append(f"randomized: {len(r.randomize)} parameters per episode")
+    return out
 
 
 def _short_to(line: str, width: int, st: Any) -> str:

@@ -8,7 +8,10 @@ state beyond a font cache. The app (``viewer/app.py``), ``KoolioEnv.render`` (vi
 Colours follow the paper: robot red, pink when a sonar reads Bump, purple past the end of
 the world, black at the goal; black sonar lines, blue lines from cameras that see the
 goal, yellow lines from cameras that see an end-of-world marker; goal and end-of-world
-markers are coloured dots.
+markers are coloured dots. What the realism models hid is dashed: a sonar ray that meets a
+wall but hears no echo (orange), a camera that has its target in view but misses it (its
+own colour); a camera that misreads another door's plate as the goal draws a magenta
+line to that plate and rings it.
 
 Drawing on a plain ``pygame.Surface`` needs no display; :func:`font` initialises
 ``pygame.font`` on first use.
@@ -60,10 +63,18 @@ HEADING: Color = (255, 255, 255)
 SONAR_LINE: Color = (0, 0, 0)
 SONAR_MISS: Color = (205, 205, 205)
 """A sonar sub-arc ray that hits nothing within range (drawn to its full length)."""
+SONAR_NO_ECHO: Color = (240, 110, 0)
+"""A sonar sub-arc ray that meets a wall but gets no echo (realism: a grazing angle, or
+beyond the ranger's range): dashed, to the wall."""
 CAMERA_GOAL_LINE: Color = (0, 70, 255)
 """Paper: blue from a camera that sees the goal."""
 CAMERA_EOW_LINE: Color = (235, 200, 0)
 """Paper: yellow from a camera that sees an end-of-world marker."""
+CAMERA_MISREAD: Color = (210, 0, 210)
+"""A camera that takes another door's plate for the goal (realism misread): a line to
+that plate, and a ring round it."""
+DASH = (7, 5)
+"""Dashed lines: pixels drawn, pixels skipped (from the robot outwards)."""
 
 ROBOT_STATES: dict[str, Color] = {
     "normal": ROBOT_NORMAL,
@@ -240,6 +251,35 @@ def draw_robot(
     pygame.draw.line(surface, HEADING, c, tip, width=max(2, camera.scale(radius / 5.0)))
 
 
+def dashed_line(
+    surface: pygame.Surface,
+    colour: Color,
+    a: tuple[int, int],
+    b: tuple[int, int],
+    width: int = 1,
+    dash: tuple[int, int] = DASH,
+) -> None:
+    """A dashed line from ``a`` to ``b``: ``dash[0]`` pixels drawn, ``dash[1]`` skipped,
+    starting with a dash at ``a``."""
+    (ax, ay), (bx, by) = a, b
+    length = math.hypot(bx - ax, by - ay)
+    if length < 1.0:
+        return
+    ux, uy = (bx - ax) / length, (by - ay) / length
+    on, period = dash[0], dash[0] + dash[1]
+    t = 0.0
+    while t < length:
+        e = min(t + on - 1, length)
+        pygame.draw.line(
+            surface,
+            colour,
+            (round(ax + ux * t), round(ay + uy * t)),
+            (round(ax + ux * e), round(ay + uy * e)),
+            width,
+        )
+        t += period
+
+
 def draw_sensors(
     surface: pygame.Surface,
     camera: Camera,
@@ -247,27 +287,104 @@ def draw_sensors(
     suite: SensorSuite,
     readings: Readings,
 ) -> None:
-    """Sensor lines (paper §5.4.5): black sonar sub-arc rays to their hits (light grey
-    to full range when nothing is hit), a blue line
-    from each camera that sees the goal, a yellow one from each camera that sees an
-    end-of-world marker (to the marker it sees). Draw the robot afterwards, on top."""
+    """Sensor lines (paper §5.4.5): the sonar sub-arc rays, then the cameras' lines (see
+    :func:`draw_sonar_rays`, :func:`draw_camera_lines`). Draw the robot afterwards, on top."""
+    draw_sonar_rays(surface, camera, pose, suite, readings)
+    draw_camera_lines(surface, camera, pose, suite, readings)
+
+
+def draw_sonar_rays(
+    surface: pygame.Surface,
+    camera: Camera,
+    pose: tuple[float, float, float],
+    suite: SensorSuite,
+    readings: Readings,
+) -> None:
+    """Every sonar sub-arc ray: black to the wall it hit when it got an echo, dashed
+    orange to the wall when it got none (realism: a grazing angle, or out of the
+    ranger's range), light grey to full length when it hit nothing."""
     x, y, h = pose
     c = camera.to_screen((x, y))
     angles = h + suite.ray_offsets
     dist = readings.rays
-    cos, sin = np.cos(angles), np.sin(angles)
-    ex, ey = x + dist * cos, y + dist * sin
-    reach = suite.ray_length - 1e-9
+    ex, ey = x + dist * np.cos(angles), y + dist * np.sin(angles)
+    hit = dist < suite.ray_length - 1e-9
+    echo = readings.echo if readings.echo.shape == dist.shape else hit
     for idx in np.ndindex(angles.shape):
         end = camera.to_screen((float(ex[idx]), float(ey[idx])))
-        colour = SONAR_LINE if dist[idx] < reach else SONAR_MISS
-        pygame.draw.line(surface, colour, c, end, width=1)
-    far = suite.far
+        if echo[idx]:
+            pygame.draw.line(surface, SONAR_LINE, c, end, width=1)
+        elif hit[idx]:
+            dashed_line(surface, SONAR_NO_ECHO, c, end)
+        else:
+            pygame.draw.line(surface, SONAR_MISS, c, end, width=1)
+
+
+def draw_camera_lines(
+    surface: pygame.Surface,
+    camera: Camera,
+    pose: tuple[float, float, float],
+    suite: SensorSuite,
+    readings: Readings,
+) -> None:
+    """Per camera: a blue line to the goal it sees, a yellow one to the end-of-world
+    marker it sees; dashed in the same colour to a target in view that it missed
+    (realism detection); magenta to another door's plate it takes for the goal, ringed
+    (realism misread)."""
+    x, y, _ = pose
+    c = camera.to_screen((x, y))
     width = max(2, camera.scale(1.0))
-    for cam in range(suite.n_camera):
-        if readings.goal[cam] < far:
+    n = suite.n_camera
+    missed = readings.missed if readings.missed.shape == (n, 2) else np.zeros((n, 2), bool)
+    misread = readings.misread if readings.misread.shape == (n,) else np.zeros(n, bool)
+    for cam in range(n):
+        if misread[cam]:
+            _misread_line(surface, camera, pose, suite, cam, width)
+        elif readings.goal[cam] < suite.far:
             pygame.draw.line(surface, CAMERA_GOAL_LINE, c, camera.to_screen(suite.goal), width)
+        elif missed[cam, 0]:
+            _missed_goal_line(surface, camera, pose, suite, cam, width)
         k = readings.eow_target[cam]
         if k >= 0:
-            end = camera.to_screen(suite.markers[k])
-            pygame.draw.line(surface, CAMERA_EOW_LINE, c, end, width)
+            pygame.draw.line(surface, CAMERA_EOW_LINE, c, camera.to_screen(suite.markers[k]), width)
+        elif missed[cam, 1]:
+            k = suite.camera_target(pose, cam, suite.markers)
+            if k >= 0:
+                end = camera.to_screen(suite.markers[k])
+                dashed_line(surface, CAMERA_EOW_LINE, c, end, width)
+
+
+def _misread_line(
+    surface: pygame.Surface,
+    camera: Camera,
+    pose: tuple[float, float, float],
+    suite: SensorSuite,
+    cam: int,
+    width: int,
+) -> None:
+    """The plate camera ``cam`` reads as the goal: a magenta line to it and a ring."""
+    k = suite.camera_target(pose, cam, suite.plates)
+    if k < 0:
+        return
+    end = camera.to_screen(suite.plates[k])
+    pygame.draw.line(surface, CAMERA_MISREAD, camera.to_screen(pose[:2]), end, width)
+    pygame.draw.circle(surface, CAMERA_MISREAD, end, max(7, camera.scale(5.0)), width=2)
+
+
+def _missed_goal_line(
+    surface: pygame.Surface,
+    camera: Camera,
+    pose: tuple[float, float, float],
+    suite: SensorSuite,
+    cam: int,
+    width: int,
+) -> None:
+    """Camera ``cam`` had a plate in view and did not detect it: dashed blue to the goal
+    (dashed magenta to another door's plate when that was the one it missed)."""
+    start = camera.to_screen(pose[:2])
+    if suite.camera_target(pose, cam, [suite.goal]) == 0:
+        dashed_line(surface, CAMERA_GOAL_LINE, start, camera.to_screen(suite.goal), width)
+        return
+    k = suite.camera_target(pose, cam, suite.plates)
+    if k >= 0:
+        dashed_line(surface, CAMERA_MISREAD, start, camera.to_screen(suite.plates[k]), width)

@@ -36,6 +36,15 @@ DIM: Color = (72, 76, 88)
 BUMP_ON: Color = (255, 105, 180)
 """The Bump flag when set (the robot's Bump colour)."""
 BUMP_OFF: Color = (222, 224, 230)
+FLAG_COLOURS: dict[str, Color] = {
+    "misread": (240, 150, 240),
+    "missed": (170, 195, 255),
+    "no echo": (255, 190, 120),
+}
+"""HUD marks of what the realism models did: a camera that misread another door's plate
+(magenta, as its line), one that missed a target in view (blue), a sonar row with a sonar
+that heard no echo although its rays met a wall (orange; the distance column shows which:
+``none, 52.9``)."""
 LEVEL_COLOURS: dict[str, Color] = {
     "Bump": (255, 170, 205),
     "Close": (255, 205, 150),
@@ -174,20 +183,38 @@ def _fmt_distance(d: float, far: float) -> str:
     return "not seen" if d >= far else f"{d:.1f} in"
 
 
+def group_distance(values: Sequence[float], far: float) -> str:
+    """A sonar group's distance: the mean its level comes from; when some of its sonars
+    heard nothing and others did (the nothing, ``really_long_distance``, makes the mean
+    Far), each sonar's reading instead.
+
+    >>> group_distance([17.6, 20.0], 10000.0), group_distance([10000.0] * 2, 10000.0)
+    ('18.8 in', 'not seen')
+    >>> group_distance([17.6, 10000.0], 10000.0)
+    '17.6, none'
+    """
+    unseen = sum(v >= far for v in values)
+    if unseen in (0, len(values)):
+        return _fmt_distance(float(np.mean(values)), far)
+    return ", ".join("none" if v >= far else f"{v:.1f}" for v in values)
+
+
 def _deg(angle: float) -> str:
     return f"{angle:+.0f}°" if angle else "0°"
 
 
 @dataclass(frozen=True)
 class HudRow:
-    """One field of the state: name, sensor angles, encoded level, distance behind it, and
-    (sonar rows) the single sonars of the field that read Bump on their own."""
+    """One field of the state: name, sensor angles, encoded level, distance behind it,
+    (sonar rows) the single sonars of the field that read Bump on their own, and marks of
+    what the realism models did (``misread``, ``missed``, ``no echo``)."""
 
     name: str
     angles: str
     level: str
     distance: str
     bumped: tuple[int, ...] = ()
+    flags: tuple[str, ...] = ()
 
 
 def hud_rows(env: KoolioEnv) -> list[HudRow]:
@@ -199,18 +226,44 @@ def hud_rows(env: KoolioEnv) -> list[HudRow]:
     for kind, values in (("GoalCam", r.goal), ("EoWCam", r.eow)):
         for c in range(s.n_camera):
             level = CAMERA_LEVELS[codes[len(rows)]]
-            rows.append(HudRow(f"{kind}{c}", _deg(cam[c]), level, _fmt_distance(values[c], s.far)))
+            flags = camera_flags(env, c, goal=kind == "GoalCam")
+            d = _fmt_distance(values[c], s.far)
+            rows.append(HudRow(f"{kind}{c}", _deg(cam[c]), level, d, flags=flags))
     bumped = set(bumped_sonars(env))
+    deaf = set(deaf_sonars(env))
     son = s.cfg.sonar.sonar_sensors_deg
     for g in s.groups:
         name = "Sonar" + "-".join(str(k) for k in g)
         angles = ",".join(_deg(son[k]) for k in g)
-        d = _fmt_distance(float(np.mean(r.sonar[g])), s.far)
+        d = group_distance(r.sonar[g].tolist(), s.far)
         level = SONAR_LEVELS[codes[len(rows)]]
-        rows.append(HudRow(name, angles, level, d, tuple(k for k in g if k in bumped)))
+        flags = ("no echo",) if any(k in deaf for k in g) else ()
+        rows.append(HudRow(name, angles, level, d, tuple(k for k in g if k in bumped), flags))
     if s.cfg.compass.in_state:
         rows.append(HudRow("Compass", "", COMPASS_LEVELS[codes[len(rows)]], f"{r.compass:.0f}/256"))
     return rows
+
+
+def camera_flags(env: KoolioEnv, camera: int, goal: bool) -> tuple[str, ...]:
+    """``("misread",)`` when the camera's goal reading is another door's plate,
+    ``("missed",)`` when it had its target (the goal, or with ``goal`` False an
+    end-of-world marker) in view and did not detect it, else ``()``."""
+    r = env.readings
+    if r.missed.shape != (env.sensors.n_camera, 2):
+        return ()
+    if goal and r.misread[camera]:
+        return ("misread",)
+    return ("missed",) if r.missed[camera, 0 if goal else 1] else ()
+
+
+def deaf_sonars(env: KoolioEnv) -> list[int]:
+    """The sonars that heard no echo at all although some of their rays met a wall (the
+    realism incidence and range models: the wall is there, the sonar reads past it)."""
+    r, s = env.readings, env.sensors
+    if r.echo.shape != r.rays.shape:
+        return []
+    hit = r.rays < s.ray_length - 1e-9
+    return [int(k) for k in np.flatnonzero(hit.any(axis=1) & ~r.echo.any(axis=1))]
 
 
 def bumped_sonars(env: KoolioEnv) -> list[int]:
@@ -243,10 +296,16 @@ def draw_hud(
     cols = _hud_columns(inner.x, st)
     y = inner.y
     marks: dict[int, pygame.Rect] = {}
+    flags: dict[str, pygame.Rect] = {}
     for row in hud_rows(env):
         mark = _hud_row(surface, row, cols, y, st)
         if mark is not None:
             marks.update(dict.fromkeys(row.bumped, mark))
+        x = max(cols[4], cols[3] + text(row.distance, st.row, DIM).get_width() + st.px(6))
+        x = x if mark is None else mark.right + st.px(4)
+        for word in row.flags:
+            flags[row.name] = _flag_mark(surface, word, x, y, st)
+            x = flags[row.name].right + st.px(4)
         y += st.row_h
     flag = _bump_flag(surface, env, inner.x, y + st.px(5), st)
     compass = env.readings.compass
@@ -261,7 +320,7 @@ def draw_hud(
         last = "last: (episode start)"
     surface.blit(text(last, st.row, INK), (inner.x, y))
     surface.set_clip(clip)
-    return {"panel": rect, "bump_flag": flag, "bump_marks": marks}
+    return {"panel": rect, "bump_flag": flag, "bump_marks": marks, "flag_marks": flags}
 
 
 def _hud_columns(x0: int, st: Style) -> tuple[int, int, int, int, int]:
@@ -288,6 +347,16 @@ def _hud_row(
     label = text("bump: " + ",".join(str(k) for k in row.bumped), st.small, INK)
     mark = pygame.Rect(x_mark, y, label.get_width() + st.px(8), st.row_h - 1)
     pygame.draw.rect(surface, BUMP_ON, mark, border_radius=3)
+    surface.blit(label, label.get_rect(center=mark.center))
+    return mark
+
+
+def _flag_mark(surface: pygame.Surface, flag: str, x: int, y: int, st: Style) -> pygame.Rect:
+    """A realism mark (``misread``, ``missed``, ``no echo``) in its colour at ``x``."""
+    label = text(flag, st.small, INK)
+    mark = pygame.Rect(x, y, label.get_width() + st.px(8), st.row_h - 1)
+    colour = FLAG_COLOURS[flag]
+    pygame.draw.rect(surface, colour, mark, border_radius=3)
     surface.blit(label, label.get_rect(center=mark.center))
     return mark
 

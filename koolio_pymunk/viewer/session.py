@@ -4,7 +4,7 @@ step at a time, for the window (paper §5.4.9).
 :class:`Session` uses the very pieces :func:`koolio_pymunk.training.train` uses --
 :class:`~koolio_pymunk.qtable.QTableStore` (table saved at every episode end),
 :class:`~koolio_pymunk.training.LogWriter`, :func:`~koolio_pymunk.training.episode_seeds`,
-:class:`~koolio_pymunk.learner.QLearner` and ``KoolioEnv.transition`` -- in the same order,
+:func:`~koolio_pymunk.learner.make_learner` and ``KoolioEnv.transition`` -- in the same order,
 so a window run of E episodes writes the same Q-table bytes and log rows as ``train
 --episodes E`` with the same seed (as long as nobody forces a rescue or flips a toggle),
 and the two can hand a table back and forth.
@@ -34,7 +34,7 @@ from ..arena import arena_record
 from ..env import KoolioEnv
 from ..episode_log import LogWriter, log_rows
 from ..errors import KoolioError, located
-from ..learner import QLearner
+from ..learner import QLearner, make_learner
 from ..qtable import QTableStore, check_compatible, load_qtable
 from ..training import (
     EVAL_STREAM,
@@ -150,7 +150,11 @@ class Session:
         if self.learn and log:
             self.stats.returns, self.stats.at_goal = read_history(log)
             self.stats.run_start = len(self.stats.returns)
-        self.agent = QLearner(self.table, cfg.learner, np.random.default_rng(seed))
+        rng = np.random.default_rng(seed)
+        if self.learn:
+            self.agent = make_learner(self.table, cfg.learner, rng, str(qtable))
+        else:
+            self.agent = QLearner(self.table, cfg.learner, rng)
         self.episode = self.first
         self.last = None if episodes is None else self.first + episodes
         self.total_steps = 0
@@ -164,10 +168,9 @@ class Session:
     # -- stepping ------------------------------------------------------------------------
     def _begin(self) -> None:
         stream = TRAIN_STREAM if self.learn else EVAL_STREAM
-        env_seed, self.agent.rng = episode_seeds(self.seed, self.episode, stream)
-        if self.learn:
-            self.agent.set_episode(self.episode)
-        else:
+        env_seed, rng = episode_seeds(self.seed, self.episode, stream)
+        self.agent.begin_episode(self.episode, rng)
+        if not self.learn:
             self.agent.epsilon = 0.0
         self.env.reset(seed=env_seed)
         self._pending_reset = False
@@ -182,7 +185,7 @@ class Session:
         if self.closed:
             return 0
         env, agent, learn = self.env, self.agent, self.learn
-        act, update, transition = agent.act, agent.update, env.transition
+        act, observe, transition = agent.act, agent.observe, env.transition
         done = 0
         while done < n and not self.done:
             if self._pending_reset:
@@ -191,7 +194,7 @@ class Session:
             action = act(state)
             nxt, reward, terminated, truncated = transition(action)
             if learn:  # from the state the action led to, before any rescue (§5.4.8)
-                update(state, action, reward, nxt, terminated)
+                observe(state, action, reward, nxt, terminated)
             done += 1
             if terminated or truncated:
                 outcome = env.judgement.event if terminated else "truncated"  # type: ignore[union-attr]

@@ -1,0 +1,100 @@
+"""Helpers of the attack and fuzz tests: the promise checked on a folder, and well-formed
+inputs to break (a small Q-table of the default layout, its header rewritten under a
+valid checksum)."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import struct
+import zlib
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+import pytest
+
+from koolio_pymunk import cli
+from koolio_pymunk.arena import arena_record, load_arena
+from koolio_pymunk.config import Config
+from koolio_pymunk.qtable import MAGIC, KeywordLayout, QTable
+from koolio_pymunk.sensors import state_fields
+from koolio_pymunk.training import sensor_signature
+
+ROOM = load_arena("room")
+
+
+# -- the promise ------------------------------------------------------------------------------
+def snapshot(folder: Path) -> dict[str, str]:
+    """Hash of every file under ``folder`` (lock files aside: they hold only a note)."""
+    out = {}
+    for p in sorted(folder.rglob("*")):
+        if p.is_file() and not p.name.endswith(".lock"):
+            with open(p, "rb") as fh:  # not Path.read_bytes: some tests patch it
+                out[str(p.relative_to(folder))] = hashlib.sha256(fh.read()).hexdigest()
+    return out
+
+
+def expect_error(
+    capsys: pytest.CaptureFixture[str],
+    folder: Path,
+    argv: Sequence[str],
+    *words: str,
+    run: Callable[[list[str]], int] = cli.main,
+    prefix: str = "koolio-pm: error: ",
+) -> str:
+    """Run ``koolio-pm argv`` (or ``run(argv)``, e.g. ``robot_runtime.main``) in ``folder``:
+    exit 2, one error line starting with ``prefix`` and holding ``words``, no traceback, no
+    file changed or added. Returns the line."""
+    before = snapshot(folder)
+    try:
+        code = run(list(argv))
+    except SystemExit as exc:  # argparse
+        code = exc.code
+    _, err = capsys.readouterr()
+    lines = err.strip().splitlines()
+    assert code == 2, (argv, err)
+    assert len(lines) == 1 and lines[0].startswith(prefix), err
+    assert "Traceback" not in err
+    for w in words:
+        assert w in lines[0], lines[0]
+    assert snapshot(folder) == before, f"{argv} changed files"
+    return lines[0]
+
+
+# -- tables -----------------------------------------------------------------------------------
+def small_table() -> QTable:
+    """Three visited states of the default configuration's layout, 3 episodes, learned in
+    the room (every header field a table of this version writes)."""
+    cfg = Config()
+    layout = KeywordLayout(tuple(state_fields(cfg.sensors)))
+    meta = {"sensors": sensor_signature(cfg), "episodes": 3, "arena": arena_record(ROOM)}
+    table = QTable(layout, meta, -30.0)
+    for codes in ((0,) * 12, (2,) * 6 + (3,) * 6, (1, 0, 2, 1, 0, 2, 3, 0, 1, 2, 3, 0)):
+        table.row(layout.state_key(codes))[:] = [-1.5, 0.25, 3.0, -30.0, 7.0]
+    return table
+
+
+def header_of(data: bytes) -> dict:
+    """The JSON header of a table file."""
+    (hlen,) = struct.unpack_from("<I", data, len(MAGIC))
+    return json.loads(data[len(MAGIC) + 4 : len(MAGIC) + 4 + hlen])
+
+
+def with_header(data: bytes, header: bytes, rows: bytes | None = None) -> bytes:
+    """A table file ``data`` with another JSON header (and rows), under a valid checksum."""
+    (hlen,) = struct.unpack_from("<I", data, len(MAGIC))
+    rest = data[len(MAGIC) + 4 + hlen : -4] if rows is None else rows
+    body = MAGIC + struct.pack("<I", len(header)) + header + rest
+    return body + struct.pack("<I", zlib.crc32(body))
+
+
+def edit_header(data: bytes, **changes: object) -> bytes:
+    """``data`` with header fields changed (``layout.n_actions=0`` sets a nested one)."""
+    header = header_of(data)
+    for key, value in changes.items():
+        node = header
+        parts = key.split(".")
+        for part in parts[:-1]:
+            node = node[part]
+        node[parts[-1]] = value
+    return with_header(data, json.dumps(header).encode())

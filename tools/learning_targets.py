@@ -1,0 +1,197 @@
+"""Measure the learning targets of ``docs/learning.md``, many seeds, and print them.
+
+Three targets (each a multi-seed measurement; nothing here is timed):
+
+* ``paper``: the ``paper`` profile on the default delivery: train up to ``--paper-episodes``
+  (3,000) episodes, a 100-episode greedy evaluation every ``--paper-every`` (250); the
+  target is >= 90 % greedy goal rate for every seed 0-4 within the budget.
+* ``default``: the default profile, episodes to competence (>= 90 % of a 100-episode greedy
+  evaluation, checked every ``--every`` = K episodes, 25 by default) for seeds 0-2, for
+  the algorithm measured and for one-step Q; the target is 3x fewer episodes.
+* ``random``: ``train --goal random`` for ``--random-episodes`` (20,000) episodes, then
+  ``eval --goal all --episodes 100 --seed 7``; the target is >= 99 % over all doors.
+
+Training is :func:`koolio_pymunk.training.train` itself, with its table and log files in
+a temporary folder (a run checked every K episodes resumes its table, which continues
+exactly like an uninterrupted run); evaluation is :func:`training.evaluate` with the
+run's seed (``--goal all``: seed 7), as ``koolio-pm eval`` does.
+
+    nice .venv/bin/python tools/learning_targets.py default --set learner.algorithm=qlambda
+    nice .venv/bin/python tools/learning_targets.py paper --set learner.algorithm=dyna
+    nice .venv/bin/python tools/learning_targets.py random --workers 2 --out random.json
+
+``--set KEY=VALUE`` (repeatable; VALUE is YAML) overrides the target's configuration;
+``--config`` replaces its profile. Runs go to ``--workers`` processes (2 by default).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import tempfile
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+TARGETS = ("paper", "default", "random")
+
+
+def overrides_of(pairs: list[str]) -> dict[str, Any]:
+    """``["learner.alpha=0.1"]`` -> ``{"learner": {"alpha": 0.1}}``."""
+    from koolio_pymunk.sweep import expand_dotted
+
+    flat = {}
+    for pair in pairs:
+        key, sep, value = pair.partition("=")
+        if not sep:
+            raise SystemExit(f"--set {pair}: expected KEY=VALUE")
+        flat[key] = yaml.safe_load(value)
+    return expand_dotted(flat)
+
+
+def run_job(job: dict[str, Any]) -> dict[str, Any]:
+    """Train one seed with periodic greedy evaluations (see the module doc)."""
+    from koolio_pymunk.config import load_config
+    from koolio_pymunk.env import KoolioEnv
+    from koolio_pymunk.qtable import QTableStore
+    from koolio_pymunk.training import evaluate, train
+
+    cfg = load_config(job["config"], overrides=job["overrides"])
+    goal = job["goal"]
+    env = KoolioEnv("hallway", config=cfg, goal=goal)
+    seed, every, budget = job["seed"], job["every"], job["episodes"]
+    checks, reached, done, train_s = [], None, 0, 0.0
+    started = time.process_time()
+    with tempfile.TemporaryDirectory(prefix="koolio-targets-") as tmp:
+        store = QTableStore(Path(tmp) / "t.qtable", warn=lambda msg: None)
+        while done < budget:
+            n = min(every, budget - done)
+            t0 = time.process_time()
+            res = train(env, store, n, seed, Path(tmp) / "t.csv", report=None)
+            train_s += time.process_time() - t0
+            done += n
+            if goal == "random":
+                continue
+            rate = evaluate(env, res.table, 100, seed).goal_rate
+            checks.append([done, rate])
+            if rate >= 0.9 and reached is None:
+                reached = done
+                if job["stop"]:
+                    break
+        out: dict[str, Any] = {"checks": checks, "reached": reached, "episodes": done}
+        if goal == "random":
+            doors = env.arena.goal_names()
+            rates = [evaluate(env, res.table, 100, 7, goal=g).goal_rate for g in doors]
+            out["doors"] = dict(zip(doors, rates))
+            out["mean"] = sum(rates) / len(rates)
+        else:
+            out["final"] = checks[-1][1]
+        out.update(
+            states=len(res.table),
+            train_cpu_s=round(train_s, 1),
+            cpu_s=round(time.process_time() - started, 1),
+        )
+    return job | out
+
+
+def jobs_for(target: str, args: argparse.Namespace) -> list[dict[str, Any]]:
+    extra = overrides_of(args.set)
+    base = {"overrides": extra, "goal": None, "stop": False}
+    if target == "paper":
+        cfg = args.config or "paper"
+        return [
+            base | {"target": target, "label": "measured", "config": cfg, "seed": s,
+                    "every": args.paper_every, "episodes": args.paper_episodes}
+            for s in (args.seeds or [0, 1, 2, 3, 4])
+        ]  # fmt: skip
+    if target == "default":
+        out = []
+        labels = [("measured", extra)] + ([] if args.no_baseline else [("one-step Q", {})])
+        for label, ov in labels:
+            for s in args.seeds or [0, 1, 2]:
+                out.append(
+                    base | {"target": target, "label": label, "config": args.config,
+                            "overrides": ov, "seed": s, "every": args.every,
+                            "episodes": args.max_episodes, "stop": True}
+                )  # fmt: skip
+        return out
+    return [
+        base | {"target": target, "label": "measured", "config": args.config, "goal": "random",
+                "seed": s, "every": args.random_episodes, "episodes": args.random_episodes}
+        for s in (args.seeds or [0])
+    ]  # fmt: skip
+
+
+def report(target: str, results: list[dict[str, Any]]) -> None:
+    print(f"\n== {target} ==  configuration: {results[0]['config'] or 'default'} + "
+          f"{json.dumps(results[0]['overrides'])}")  # fmt: skip
+    if target == "random":
+        for r in results:
+            worst = min(r["doors"].items(), key=lambda kv: kv[1])
+            print(
+                f"  seed {r['seed']}: {r['mean']:.1%} over {len(r['doors'])} doors "
+                f"(worst {worst[0]} {worst[1]:.0%}), {r['episodes']} episodes, "
+                f"{r['train_cpu_s']:.0f} CPU s of training -> target >= 99 %: "
+                f"{'met' if r['mean'] >= 0.99 else 'NOT met'}"
+            )
+        return
+    by_label: dict[str, list[dict[str, Any]]] = {}
+    for r in results:
+        by_label.setdefault(r["label"], []).append(r)
+    for label, rs in by_label.items():
+        for r in rs:
+            curve = " ".join(f"{e}:{g:.0%}" for e, g in r["checks"])
+            got = f"first >= 90 % at {r['reached']}" if r["reached"] else "never >= 90 %"
+            print(f"  {label:<10} seed {r['seed']}: {got}; final {r['final']:.0%}; "
+                  f"{r['train_cpu_s']:.0f} CPU s; {curve}")  # fmt: skip
+    if target == "paper":
+        ok = all(r["reached"] for r in results)
+        print(f"  target (>= 90 % for every seed within the budget): {'met' if ok else 'NOT met'}")
+        return
+    if "one-step Q" in by_label:
+        cap = results[0]["episodes"]
+
+        def episodes(rs: list[dict[str, Any]]) -> list[int]:
+            return [r["reached"] or cap for r in rs]
+
+        new, old = episodes(by_label["measured"]), episodes(by_label["one-step Q"])
+        ratio = sum(old) / max(1, sum(new))
+        print(
+            f"  episodes to competence: measured {new}, one-step Q {old} "
+            f"(a run that never reached it counts its budget); one-step Q / measured = "
+            f"{ratio:.2f} -> target >= 3: {'met' if ratio >= 3 else 'NOT met'}"
+        )
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("targets", nargs="*", choices=[*TARGETS, []], default=list(TARGETS))
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    p.add_argument("--config", default=None, help="profile or file instead of the target's")
+    p.add_argument("--seeds", type=int, nargs="*", default=None)
+    p.add_argument("--workers", type=int, default=2)
+    p.add_argument("--every", type=int, default=25, help="K of the default target (25)")
+    p.add_argument("--max-episodes", type=int, default=600, help="default target's budget")
+    p.add_argument("--no-baseline", action="store_true", help="default: skip one-step Q")
+    p.add_argument("--paper-episodes", type=int, default=3000)
+    p.add_argument("--paper-every", type=int, default=250)
+    p.add_argument("--random-episodes", type=int, default=20_000)
+    p.add_argument("--out", default=None, help="write every result as JSON here")
+    args = p.parse_args(argv)
+    jobs = [j for t in args.targets for j in jobs_for(t, args)]
+    print(f"{len(jobs)} runs on {args.workers} worker processes")
+    with ProcessPoolExecutor(args.workers) as pool:
+        results = list(pool.map(run_job, jobs))
+    for t in args.targets:
+        report(t, [r for r in results if r["target"] == t])
+    if args.out:
+        Path(args.out).write_text(json.dumps(results, indent=1) + "\n", encoding="utf-8")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
