@@ -19,13 +19,16 @@ local processes (``--workers N``) or as Ray tasks (``--ray [ADDRESS]``), and wri
     seeds: 3                   # a count (0, 1, 2) or a list of seeds
     arena: hallway             # built-in name or file (relative to the spec)
     goal: null                 # goal name, 'random', or null (the arena's active goal)
+    rotate_deg: null           # the arena's rotation (clockwise, degrees; the paper's 5);
+                               #  null keeps the arena file's own rotate_deg
     config: base.yaml          # optional configuration file (relative to the spec) or
                                #  profile name (paper)
     world: koolio-real         # optional world profile or file laid over every run
     base: {episode: {max_steps: 600}}      # configuration overrides for every run
     grid:                      # every combination of these (dotted config paths,
       learner.alpha: [0.1, 0.3]            #  or arena / goal)
-      learner.gamma: [0.9, 0.97]   #  (world: [null, koolio-real] compares worlds)
+      learner.gamma: [0.9, 0.97]   #  (world: [null, koolio-real] compares worlds;
+                                   #  rotate_deg: [0, 5] the arena's rotation)
     runs:                      # and/or a list of named override sets (each combined
       - {name: soft-bumps, rewards.bump: -2}   #  with every grid combination)
     eval_every: 100            # greedy evaluation every K episodes (default episodes/10)
@@ -34,6 +37,9 @@ local processes (``--workers N``) or as Ray tasks (``--ray [ADDRESS]``), and wri
 
 **Results.** ``final_goal_rate``, ``final_mean_steps``, ``final_mean_bumps`` and
 ``final_mean_return`` come from the greedy evaluation after the last episode;
+``late_goal_rate`` is the mean greedy goal rate of the checkpoints in the last third of
+the episodes (one evaluation is a snapshot: a greedy policy still learning can swing
+from one checkpoint to the next);
 ``competence_episode`` is the first checkpoint whose greedy goal rate reaches
 ``competence`` (empty: not reached) and ``competence_seconds`` the training time until
 then; ``train_*`` summarise the training episodes themselves; ``table_sha256`` identifies
@@ -71,6 +77,7 @@ import hashlib
 import io
 import itertools
 import json
+import math
 import os
 import re
 import shutil
@@ -88,6 +95,7 @@ SPEC_KEYS = (
     "seeds",
     "arena",
     "goal",
+    "rotate_deg",
     "config",
     "world",
     "base",
@@ -98,7 +106,7 @@ SPEC_KEYS = (
     "competence",
 )
 #: Parameters that are not configuration paths.
-RUN_KEYS = ("arena", "goal", "world")
+RUN_KEYS = ("arena", "goal", "world", "rotate_deg")
 #: Result columns that depend on the machine's speed (left out of comparisons).
 TIMING_COLUMNS = ("competence_seconds", "train_seconds")
 RESULT_COLUMNS = (
@@ -113,6 +121,7 @@ RESULT_COLUMNS = (
     "final_mean_steps",
     "final_mean_bumps",
     "final_mean_return",
+    "late_goal_rate",
     "competence_episode",
     "competence_seconds",
     "train_goal_rate",
@@ -200,6 +209,8 @@ class SweepSpec:
     eval_episodes: int
     competence: float
     text: str = ""
+    rotate_deg: float | None = None
+    """The arena's rotation for every run (None: the arena file's own ``rotate_deg``)."""
 
 
 def load_spec(path: str | Path) -> SweepSpec:
@@ -260,6 +271,8 @@ def parse_spec(
         world = _config_ref(str(world), folder)
     arena = str(data.get("arena", "hallway"))
     goal = data.get("goal")
+    rotate = data.get("rotate_deg")
+    rotate = None if rotate is None else _rotation(rotate, src, "rotate_deg")
     name = str(data.get("name") or default_name)
     if not re.fullmatch(r"[A-Za-z0-9._-]+", name):
         raise ConfigError(located(src, "name", f"use letters, digits, . _ - only: {name!r}"))
@@ -279,6 +292,7 @@ def parse_spec(
         eval_episodes=eval_episodes,
         competence=float(competence),
         text=text,
+        rotate_deg=rotate,
     )
 
 
@@ -288,6 +302,13 @@ def _int(value: Any, src: str, item: str, minimum: int) -> int:
     if value < minimum:
         raise ConfigError(located(src, item, f"must be >= {minimum}, got {value}"))
     return value
+
+
+def _rotation(value: Any, src: str, item: str) -> float:
+    """An arena rotation in degrees: a finite number."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ConfigError(located(src, item, f"expected a finite number of degrees, got {value!r}"))
+    return float(value)
 
 
 def _seeds(value: Any, src: str) -> list[int]:
@@ -379,6 +400,9 @@ def plan(spec: SweepSpec) -> list[dict[str, Any]]:
             label = _label(variant.get("name"), combo if variant.get("name") else params)
             arena = str(params.pop("arena", spec.arena))
             goal = params.pop("goal", spec.goal)
+            rotate = params.pop("rotate_deg", spec.rotate_deg)
+            if rotate is not None:
+                rotate = _rotation(rotate, spec.source, f"{where}: rotate_deg")
             goal = None if goal is None else str(goal)
             world = spec.world
             if "world" in params:  # a grid or runs value: relative to the spec, like arena
@@ -394,6 +418,8 @@ def plan(spec: SweepSpec) -> list[dict[str, Any]]:
             if key not in arenas:
                 arenas[key] = load_arena(arena, cfg.robot.radius)
             arena_obj = arenas[key]
+            if rotate is not None:  # the paper's trick, swept without a copy of the file
+                arena_obj = dataclasses.replace(arena_obj, rotate_deg=rotate)
             if goal is not None and goal != "random" and goal not in arena_obj.goal_names():
                 raise ConfigError(
                     f"{spec.source}: {where}: goal: no goal named {goal!r} in {arena} "
@@ -425,6 +451,7 @@ def plan(spec: SweepSpec) -> list[dict[str, Any]]:
                     {
                         **settings,
                         "arena_obj": arena_obj,
+                        "rotate_deg": arena_obj.rotate_deg,
                         "seed": seed,
                         "config_id": config_id,
                         "run_id": f"{config_id}/seed{seed}",
@@ -515,6 +542,7 @@ def run_one(task: dict[str, Any]) -> dict[str, Any]:
         "final_mean_steps": final["mean_steps"],
         "final_mean_bumps": final["mean_bumps"],
         "final_mean_return": final["mean_return"],
+        "late_goal_rate": late_goal_rate(checkpoints, episodes),
         "competence_episode": competence[0] if competence else "",
         "competence_seconds": round(competence[1], 3) if competence else "",
         "train_goal_rate": sum(r.outcome == "goal" for r in results) / n,
@@ -535,6 +563,18 @@ def run_one(task: dict[str, Any]) -> dict[str, Any]:
             "config.yaml": cfg.to_yaml().encode(),
         },
     }
+
+
+def late_goal_rate(checkpoints: list[dict[str, Any]], episodes: int) -> float:
+    """Mean greedy goal rate of the checkpoints after two thirds of ``episodes`` (the
+    last checkpoint alone when there is no other).
+
+    >>> late_goal_rate([{"episode": e, "goal_rate": e / 10} for e in (1, 2, 3, 4, 5, 6)], 6)
+    0.55
+    """
+    late = [c["goal_rate"] for c in checkpoints if 3 * c["episode"] > 2 * episodes]
+    late = late or [checkpoints[-1]["goal_rate"]]
+    return sum(late) / len(late)
 
 
 #: Temporary run folders: ``<tmp>/koolio-sweep-<pid>-<random>``.
@@ -949,19 +989,41 @@ def _stats(values: list[float]) -> tuple[float, float]:
 def config_summary(
     tasks: list[dict[str, Any]], rows: dict[str, dict[str, str]]
 ) -> list[dict[str, Any]]:
-    """Per configuration: seeds finished, mean and std of the final figures, competence."""
+    """Per configuration: seeds finished, mean and std of the final figures (and the
+    lowest and highest final goal rate), competence, and the table's size: ``states``
+    visited (mean and std over seeds) out of ``state_space``, the number of states the
+    sensor layout can encode (the paper's dense table has 5 entries per state)."""
     out = []
     for cid, c in _configs(tasks).items():
         got = [rows[t["run_id"]] for t in c["runs"] if t["run_id"] in rows]
         entry: dict[str, Any] = {"config_id": cid, "label": c["label"], "seeds": len(got)}
-        for col in ("final_goal_rate", "final_mean_steps", "final_mean_bumps"):
-            mean, std = _stats([float(r[col]) for r in got])
+        for col in (
+            "final_goal_rate",
+            "late_goal_rate",
+            "final_mean_steps",
+            "final_mean_bumps",
+            "states",
+        ):
+            mean, std = _stats([float(r[col]) for r in got if r.get(col, "") != ""])
             entry[f"{col}_mean"], entry[f"{col}_std"] = mean, std
+            if col == "final_goal_rate":
+                rates = [float(r[col]) for r in got]
+                entry[f"{col}_min"] = min(rates) if rates else float("nan")
+                entry[f"{col}_max"] = max(rates) if rates else float("nan")
         comp = [int(r["competence_episode"]) for r in got if r["competence_episode"] != ""]
         entry["competent_seeds"] = len(comp)
         entry["competence_episode_mean"] = sum(comp) / len(comp) if comp else ""
+        entry["state_space"] = _state_space(c["runs"][0]["config"])
         out.append(entry)
     return out
+
+
+def _state_space(config: dict[str, Any]) -> int:
+    """States the configuration's sensor layout can encode (a dense table's rows)."""
+    from .config import config_from_dict
+    from .sensors import state_fields
+
+    return math.prod(levels for _, levels in state_fields(config_from_dict(config).sensors))
 
 
 def _write_configs(path: Path, tasks: list[dict[str, Any]], rows: dict[str, Any]) -> None:
@@ -973,13 +1035,16 @@ def _write_configs(path: Path, tasks: list[dict[str, Any]], rows: dict[str, Any]
 
 
 def print_summary(rows: dict[str, dict[str, str]], tasks: list[dict[str, Any]]) -> None:
+    """Per configuration: final greedy goal rate (mean ± std and min-max over seeds),
+    late goal rate, competent seeds @ their mean episode of competence, steps, bumps,
+    states visited."""
     print(
-        f"  {'configuration':<40} {'seeds':>5} {'goal rate':>15} {'competent':>12} "
-        f"{'steps':>7} {'bumps':>6}"
+        f"  {'configuration':<36} {'seeds':>5} {'goal rate':>15} {'min-max':>11} "
+        f"{'late':>6} {'competent':>11} {'steps':>7} {'bumps':>6} {'states':>7}"
     )
     for e in config_summary(tasks, rows):
         if not e["seeds"]:
-            print(f"  {e['label'][:40]:<40} {0:>5}  (not run)")
+            print(f"  {e['label'][:36]:<36} {0:>5}  (not run)")
             continue
         comp = (
             f"{e['competent_seeds']}/{e['seeds']} @{e['competence_episode_mean']:.0f}"
@@ -987,9 +1052,12 @@ def print_summary(rows: dict[str, dict[str, str]], tasks: list[dict[str, Any]]) 
             else f"0/{e['seeds']}"
         )
         rate = f"{e['final_goal_rate_mean']:.1%} ±{e['final_goal_rate_std']:.1%}"
+        spread = f"{e['final_goal_rate_min']:.0%}-{e['final_goal_rate_max']:.0%}"
         print(
-            f"  {e['label'][:40]:<40} {e['seeds']:>5} {rate:>15} {comp:>12} "
-            f"{e['final_mean_steps_mean']:>7.1f} {e['final_mean_bumps_mean']:>6.1f}"
+            f"  {e['label'][:36]:<36} {e['seeds']:>5} {rate:>15} {spread:>11} "
+            f"{e['late_goal_rate_mean']:>6.1%} {comp:>11} "
+            f"{e['final_mean_steps_mean']:>7.1f} {e['final_mean_bumps_mean']:>6.1f} "
+            f"{e['states_mean']:>7.0f}"
         )
 
 

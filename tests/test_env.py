@@ -318,3 +318,54 @@ def test_the_smaller_cap_truncates(kwargs: dict, cap: int) -> None:
     flags = [env.step(int(Action.ROTATE_LEFT))[2:4] for _ in range(cap)]
     assert flags == [(False, False)] * (cap - 1) + [(False, True)]
     env.close()
+
+
+def _rotate(p: tuple[float, float], deg: float) -> tuple[float, float]:
+    t = -math.radians(deg)
+    return (math.cos(t) * p[0] - math.sin(t) * p[1], math.sin(t) * p[0] + math.cos(t) * p[1])
+
+
+@pytest.mark.parametrize("world", [None, "koolio-real"])
+@pytest.mark.parametrize("arena_name", ["hallway", "obstacles"])
+def test_a_rotated_arena_is_the_same_task(arena_name: str, world: str | None) -> None:
+    """The paper's 5-degree rotation (``rotate_deg``, swept by ``examples/experiments/
+    rotation.yaml``) turns the start, the walls, every plate and zone with it: the same
+    actions from the same relative heading give the same states, rewards and events,
+    and poses that are the rotated ones, in the ideal world and with every realism model
+    (misread plates, motion errors). Auto rescue is off: its spin draws a heading in the
+    world's frame, a uniform draw either way but not the same number of degrees."""
+    import dataclasses
+
+    from koolio_pymunk.arena import load_arena
+    from koolio_pymunk.config import load_config
+
+    cfg = load_config(None, {"rescue": {"auto_rescue_toggle": False}})
+    arena = load_arena(arena_name)
+    envs = [
+        KoolioEnv(arena=dataclasses.replace(arena, rotate_deg=deg), config=cfg, world=world)
+        for deg in (0.0, 5.0)
+    ]
+    start = envs[1].world_arena.start.at
+    assert start == pytest.approx(_rotate(arena.start.at, 5.0))
+    assert envs[1].world_arena.goal().at == pytest.approx(_rotate(arena.goal().at, 5.0))
+    for marker, turned in zip(arena.end_of_world, envs[1].world_arena.end_of_world):
+        assert turned.at == pytest.approx(_rotate(marker.at, 5.0))
+        assert envs[1].zones.contains(*turned.at)
+    rng = np.random.default_rng(3)
+    for seed in range(3):
+        heading = float(rng.uniform(0.0, 2.0 * math.pi))
+        actions = rng.choice(5, size=150, p=[0.02, 0.2, 0.2, 0.48, 0.1])
+        runs = []
+        for env, turn in zip(envs, (0.0, math.radians(5.0))):
+            obs, info = env.reset(seed=seed, options={"heading": heading - turn})
+            steps = [(obs.tolist(), 0.0, "reset", info["pose"])]
+            for action in actions:
+                obs, reward, term, trunc, info = env.step(int(action))
+                steps.append((obs.tolist(), reward, info["event"], info["pose"]))
+                if term or trunc:
+                    break
+            runs.append(steps)
+        assert len(runs[0]) == len(runs[1])
+        for (obs0, r0, ev0, pose0), (obs5, r5, ev5, pose5) in zip(*runs):
+            assert (obs0, r0, ev0) == (obs5, r5, ev5)
+            assert pose5[:2] == pytest.approx(_rotate(pose0[:2], 5.0), abs=1e-6)

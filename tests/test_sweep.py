@@ -122,6 +122,42 @@ def test_spec_grid_and_runs_make_configurations(tmp_path):
     assert [t["seed"] for t in tasks[:4]] == [0, 1, 0, 1]
 
 
+def test_rotate_deg_sweeps_the_arena_rotation_without_a_copy_of_the_file():
+    runs = [{"name": "file"}, {"name": "r", "rotate_deg": 5}]
+    spec = parse_spec({"episodes": 2, "rotate_deg": 2, "runs": runs}, "s.yaml")
+    tasks = plan(spec)
+    assert [t["arena_obj"].rotate_deg for t in tasks] == [2.0, 5.0]
+    assert [t["rotate_deg"] for t in tasks] == [2.0, 5.0]
+    assert {t["arena"] for t in tasks} == {"hallway"}
+    assert len({t["config_id"] for t in tasks}) == 2  # the rotation is part of the hash
+    plain = plan(parse_spec({"episodes": 2}, "s.yaml"))[0]
+    zero = plan(parse_spec({"episodes": 2, "grid": {"rotate_deg": [0]}}, "s.yaml"))[0]
+    assert plain["arena_obj"].rotate_deg == zero["arena_obj"].rotate_deg == 0.0
+    assert plain["config_id"].split("-")[-1] == zero["config_id"].split("-")[-1]
+    with pytest.raises(ConfigError, match=r"s.yaml: grid: rotate_deg: expected a finite num"):
+        plan(parse_spec({"episodes": 2, "grid": {"rotate_deg": ["five"]}}, "s.yaml"))
+    with pytest.raises(ConfigError, match=r"s.yaml: rotate_deg: expected a finite number"):
+        parse_spec({"episodes": 2, "rotate_deg": float("nan")}, "s.yaml")
+
+
+def test_summary_reports_spread_and_table_size(spec_file, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert cli.main(["sweep", str(spec_file), "--out", str(out), "--workers", "1"]) == 0
+    said = capsys.readouterr().out
+    assert "min-max" in said and "states" in said
+    with open(out / "configs.csv", newline="") as fh:
+        configs = list(csv.DictReader(fh))
+    rows = _rows(out)
+    for c in configs:
+        mine = [r for r in rows if r["config_id"] == c["config_id"]]
+        rates = [float(r["final_goal_rate"]) for r in mine]
+        states = [int(r["states"]) for r in mine]
+        assert float(c["final_goal_rate_min"]) == min(rates)
+        assert float(c["final_goal_rate_max"]) == max(rates)
+        assert float(c["states_mean"]) == sum(states) / len(states)
+        assert int(c["state_space"]) == 3**6 * 4**6  # the paper's 2,985,984 states
+
+
 @pytest.mark.parametrize(
     ("data", "message"),
     [
