@@ -1,6 +1,6 @@
 """The pymunk world: static wall segments and the robot's circle body (paper §5.4.2, §5.4.4).
 
-Design (see ``shared/notes/pymunk-facts.md``): a kinematic body gets no collision response
+Design (measured with pymunk 7): a kinematic body gets no collision response
 from static walls, so the robot is a **dynamic** circle body, with infinite moment (contacts
 never spin it) and zero friction (it slides along walls). A move of ``d`` inches sets the
 body's velocity once to ``d`` per unit time and steps the space for one time unit in
