@@ -20,25 +20,25 @@ from typing import TYPE_CHECKING, Any
 import gymnasium as gym
 
 if TYPE_CHECKING:
-    from .env import KoolioEnv
+    from .task.env import KoolioEnv
 
 __all__ = ["KoolioEnv", "__version__"]
 __version__ = "0.1.0"
 
 gym.register(
     id="koolio_pymunk/Hallway-v0",
-    entry_point="koolio_pymunk.env:KoolioEnv",
+    entry_point="koolio_pymunk.task.env:KoolioEnv",
     kwargs={"arena": "hallway"},
-    # The default ``episode.max_steps`` (tests/test_env.py checks they agree); see the
+    # The default ``episode.max_steps`` (tests/task/test_env.py checks they agree); see the
     # KoolioEnv docstring for how the env's own cap and TimeLimit relate.
     max_episode_steps=1500,
 )
 
 
 def __getattr__(name: str) -> Any:
-    """``koolio_pymunk.KoolioEnv`` imports :mod:`koolio_pymunk.env` on first use."""
+    """``koolio_pymunk.KoolioEnv`` imports :mod:`koolio_pymunk.task.env` on first use."""
     if name == "KoolioEnv":
-        from .env import KoolioEnv
+        from .task.env import KoolioEnv
 
         return KoolioEnv
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -62,6 +62,7 @@ import math
 import os
 import random
 import shutil
+import stat
 import sys
 from collections.abc import Sequence
 from typing import Any
@@ -72,6 +73,9 @@ VERSION = 1
 MAX_POLICY_BYTES = 1 << 30
 #: Learning algorithms (``learner.algorithm``; absent means ``q``) and their parameters.
 ALGORITHMS = {"q": (), "qlambda": ("trace_decay", "trace_cutoff"), "dyna": ("planning_steps",)}
+#: Most simulated updates per real step (``learner.planning_steps``; the simulator's
+#: configuration has the same limit): 1e12 made every step last for days.
+MAX_PLANNING_STEPS = 10_000
 #: The paper's five actions; an action's index is the low bits of the keyword.
 ACTION_NAMES = ("Stop", "RotateLeft", "RotateRight", "Forward", "Reverse")
 STOP = 0
@@ -182,9 +186,12 @@ class Encoder:
         self.n_camera = int(enc["n_camera"])
         self.max_camera_view = float(enc["max_camera_view"])
         self.compass_in_state = bool(enc["compass_in_state"])
+        mem = enc.get("memory") or {}
+        self.memory = {k: mem.get(k, v) for k, v in NO_MEMORY.items()}
+        """The memory's settings (``encoding.memory``; all off when absent)."""
 
     def fields(self) -> list[tuple[str, int]]:
-        """``(name, levels)`` of the state fields this encoder produces."""
+        """``(name, levels)`` of the state fields: the sensors', then the memory's."""
         cam = len(self.camera_thresholds) + 1
         son = len(self.sonar_thresholds) + 1
         out = [(f"GoalCam{c}", cam) for c in range(self.n_camera)]
@@ -192,7 +199,17 @@ class Encoder:
         out += [("Sonar" + "-".join(str(i) for i in g), son) for g in self.sonar_groups]
         if self.compass_in_state:
             out.append(("Compass", 4))
+        mem = self.memory
+        out += [("GoalMemory", self.n_camera + 1)] if mem["goal_camera"] else []
+        out += [("EoWMemory", self.n_camera + 1)] if mem["eow_camera"] else []
+        out += [("LastAction", len(ACTION_NAMES) + 1)] if mem["previous_action"] else []
         return out
+
+    @property
+    def remembers(self) -> bool:
+        """The state holds memory fields (:class:`Memory`)."""
+        m = self.memory
+        return bool(m["goal_camera"] or m["eow_camera"] or m["previous_action"])
 
     def encode(
         self,
@@ -221,6 +238,10 @@ class Encoder:
         if v is None or v > self.max_camera_view:
             return len(self.camera_thresholds)
         return bisect.bisect_right(self.camera_thresholds, v)
+
+    def sees(self, v: float | None) -> bool:
+        """A camera reading that saw its target (not nothing, within ``max_camera_view``)."""
+        return v is not None and v <= self.max_camera_view
 
     def bump(self, sonar: Sequence[float]) -> bool:
         """Any single sonar reads Bump (below the first sonar threshold)."""
@@ -251,6 +272,67 @@ def _numbers(values: Sequence[Any], n: int, name: str, allow_none: bool) -> list
     return out
 
 
+#: ``encoding.memory`` of a policy whose state holds no memory.
+NO_MEMORY: dict[str, Any] = {
+    "goal_camera": False,
+    "eow_camera": False,
+    "forget_after": 0,
+    "previous_action": False,
+}
+
+
+class Memory:
+    """What the robot remembers in its state: the simulator's ``sensing.memory.Memory``,
+    standard-library copy (the same fields, the same updates).
+
+    ``GoalMemory`` / ``EoWMemory``: the camera that last saw the goal plate / an
+    end-of-world marker (0: none; ``1 + camera``; the nearest reading when several see it,
+    ties to the lower camera), forgotten after ``forget_after`` steps without a sighting
+    (0: never); ``LastAction``: 0 at the start of an episode, then ``1 + action``. Call
+    :meth:`reset` at the start of every episode; :meth:`Policy.encode` updates it with each
+    reading (``action`` None after a reset or a rescue: sightings are recorded, nothing
+    ages, the last action stays).
+    """
+
+    def __init__(self, encoder: Encoder) -> None:
+        self.encoder = encoder
+        self.reset()
+
+    def reset(self) -> None:
+        """A new episode: nothing seen, no action yet."""
+        self.goal = self.eow = self.action = 0
+        self.goal_age = self.eow_age = 0
+
+    def update(self, goal: Sequence[Any], eow: Sequence[Any], action: int | None) -> None:
+        """Remember one reading made after ``action``."""
+        moved = action is not None
+        self.goal, self.goal_age = self._sighting(goal, self.goal, self.goal_age, moved)
+        self.eow, self.eow_age = self._sighting(eow, self.eow, self.eow_age, moved)
+        if moved:
+            self.action = 1 + int(action)  # type: ignore[arg-type]
+
+    def _sighting(self, readings: Sequence[Any], held: int, age: int, moved: bool) -> tuple:
+        best, best_d = 0, math.inf
+        for c, d in enumerate(readings):
+            if self.encoder.sees(d) and d < best_d:
+                best, best_d = 1 + c, d
+        if best:
+            return best, 0
+        if not moved or not held:
+            return held, age
+        age += 1
+        k = int(self.encoder.memory["forget_after"])
+        return (0, 0) if k > 0 and age >= k else (held, age)
+
+    def codes(self) -> tuple[int, ...]:
+        """The memory's codes, in keyword order (only the fields that are on)."""
+        mem = self.encoder.memory
+        out = [self.goal] if mem["goal_camera"] else []
+        out += [self.eow] if mem["eow_camera"] else []
+        out += [self.action] if mem["previous_action"] else []
+        return tuple(out)
+
+
 class Policy:
     """A loaded policy: layout, encoder, Q rows, learning settings and metadata.
 
@@ -268,7 +350,9 @@ class Policy:
         self.learner: dict[str, Any] = dict(doc.get("learner") or {})
         self.algorithm = str(self.learner.get("algorithm", "q"))
         """``q``, ``qlambda`` or ``dyna`` (the file's ``learner.algorithm``)."""
-        self.model = Model.from_json(doc.get("model")) if self.algorithm == "dyna" else None
+        self.model = (
+            Model.from_json(doc.get("model"), self.layout) if self.algorithm == "dyna" else None
+        )
         """Dyna-Q's model of the real transitions (``dyna`` only; saved in the file)."""
         self.rewards: dict[str, float] = dict(doc.get("rewards") or {})
         self.q_init = float(doc["q_init"])
@@ -286,11 +370,7 @@ class Policy:
     @classmethod
     def load(cls, path: str) -> Policy:
         """Read and validate a policy file; PolicyError (one line) when it is bad."""
-        try:
-            with open(path, "rb") as fh:
-                data = fh.read(MAX_POLICY_BYTES + 1)
-        except OSError as exc:
-            raise _err(str(path), "", f"cannot read: {exc.strerror}") from None
+        data = read_regular(str(path), MAX_POLICY_BYTES + 1)
         if len(data) > MAX_POLICY_BYTES:
             raise _err(str(path), "", f"larger than {MAX_POLICY_BYTES >> 20} MiB: not a policy")
         try:
@@ -334,6 +414,7 @@ class Policy:
     def save(self, path: str, written_by: str = "robot_runtime", backup: bool = True) -> None:
         """Write the policy atomically; the previous file becomes ``<path>.bak``."""
         text = dump_document(self.to_document(written_by))
+        check_regular(path)
         if backup and os.path.exists(path):
             _atomic(path + ".bak", lambda tmp: shutil.copyfile(path, tmp))
         atomic_write_text(path, text)
@@ -345,9 +426,27 @@ class Policy:
         goal_cam: Sequence[float | None],
         eow_cam: Sequence[float | None],
         compass: float | None = None,
+        memory: Memory | None = None,
+        action: int | None = None,
     ) -> tuple[int, ...]:
-        """Raw readings -> state codes (see :class:`Encoder`)."""
-        return self.encoder.encode(sonar, goal_cam, eow_cam, compass)
+        """Raw readings -> state codes (see :class:`Encoder`). A policy whose state holds
+        memory fields needs the episode's ``memory`` (:meth:`new_memory`), which this
+        updates with the reading and ``action``, the action just taken (None after a reset
+        or a rescue); its codes follow the sensors'."""
+        codes = self.encoder.encode(sonar, goal_cam, eow_cam, compass)
+        if not self.encoder.remembers:
+            return codes
+        if memory is None:
+            raise PolicyError("memory: this policy's state remembers (encoding.memory): pass "
+                              "the episode's Memory (Policy.new_memory)")  # fmt: skip
+        n = self.encoder.n_camera
+        memory.update(_numbers(goal_cam, n, "goal_cam", True),
+                      _numbers(eow_cam, n, "eow_cam", True), action)  # fmt: skip
+        return codes + memory.codes()
+
+    def new_memory(self) -> Memory:
+        """An empty memory for this policy's encoding (reset it at every episode start)."""
+        return Memory(self.encoder)
 
     def state_key(self, codes: Sequence[int]) -> int:
         if len(codes) != len(self.layout.levels):
@@ -409,12 +508,8 @@ class Policy:
                 f"action: {action!r} is not an action (0..{self.layout.n_actions - 1})"
             )
         row = self.row(state)
-        if terminal:
-            target = reward
-        else:
-            nxt = self.rows.get(next_state)
-            target = reward + gamma * (max(nxt) if nxt is not None else self.q_init)
-        row[action] += alpha * (target - row[action])
+        nxt = self.rows.get(next_state)
+        row[action] += td_step(row[action], reward, nxt, self.q_init, terminal, alpha, gamma)
         return row[action]
 
     def _setting(self, name: str, value: float | None) -> float:
@@ -448,6 +543,54 @@ class Policy:
         if event not in self.rewards:
             raise PolicyError(f"rewards: no value for {event!r} in the policy file")
         return event, float(self.rewards[event]), event in ("goal", "end_of_world")
+
+
+_SPECIAL = (
+    (stat.S_ISDIR, "a folder"),
+    (stat.S_ISFIFO, "a FIFO (named pipe)"),
+    (stat.S_ISCHR, "a character device"),
+    (stat.S_ISBLK, "a block device"),
+    (stat.S_ISSOCK, "a socket"),
+)
+
+
+def _not_regular(path: str, mode: int) -> PolicyError:
+    kind = next((words for test, words in _SPECIAL if test(mode)), "a special file")
+    return _err(path, "", f"is {kind}, not a regular file")
+
+
+def check_regular(path: str) -> None:
+    """Refuse an existing ``path`` that is not a regular file (a FIFO would block a
+    writer for ever); a missing one is fine. The simulator's ``files.check_regular``."""
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:  # the write that follows says why it fails
+        return
+    if not stat.S_ISREG(mode):
+        raise _not_regular(path, mode)
+
+
+def read_regular(path: str, limit: int) -> bytes:
+    """At most ``limit`` bytes of the regular file ``path``, opened without blocking
+    (a FIFO is refused, not waited on): the simulator's ``files.read_bytes``."""
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0)
+    try:
+        fd = os.open(path, flags)
+    except OSError as exc:  # e.g. a socket cannot be opened (ENXIO): say what it is
+        check_regular(path)
+        raise _err(path, "", f"cannot read: {exc.strerror}") from None
+    try:
+        mode = os.fstat(fd).st_mode
+        if not stat.S_ISREG(mode):
+            raise _not_regular(path, mode)
+        with os.fdopen(fd, "rb") as fh:
+            fd = -1
+            return fh.read(limit)
+    except OSError as exc:
+        raise _err(path, "", f"cannot read: {exc.strerror}") from None
+    finally:
+        if fd >= 0:
+            os.close(fd)
 
 
 def _reject_constant(name: str) -> float:
@@ -484,6 +627,7 @@ def encoding_json(enc: Encoder) -> dict[str, Any]:
         "n_camera": enc.n_camera,
         "max_camera_view": enc.max_camera_view,
         "compass_in_state": enc.compass_in_state,
+        **({"memory": dict(enc.memory)} if enc.remembers else {}),
         "levels": {
             "sonar": list(_level_names(("Bump", "Close", "Medium", "Far"), enc.sonar_thresholds)),
             "camera": list(_level_names(("Close", "Medium", "Far"), enc.camera_thresholds)),
@@ -511,6 +655,8 @@ def rows_json(rows: dict[int, list[float]], action_bits: int) -> dict[str, Any]:
 
 def validate_document(doc: Any, source: str = "<policy>") -> None:
     """Check a version-1 ``koolio-policy`` document; PolicyError naming the bad item.
+    Every number anywhere in it is finite (JSON's ``1e400`` reads as infinity, which the
+    next save could not write).
 
     Fields (JSON object):
 
@@ -530,20 +676,23 @@ def validate_document(doc: Any, source: str = "<policy>") -> None:
     * ``sensors``: the simulator's sensor signature (angles, arcs, ranges, thresholds):
       what the table was learned with; ``koolio-pm train --init-qtable`` refuses a file
       whose signature differs from the run's.
-    * ``learner``: ``alpha``, ``gamma``, ``epsilon`` defaults for the robot, and for a
-      learner other than one-step Q its ``algorithm`` (``qlambda``: with
-      ``trace_decay`` in [0, 1] and ``trace_cutoff`` in (0, 1); ``dyna``: with
-      ``planning_steps``, an integer >= 0); ``rewards``: the reward of each event
-      (``goal, end_of_world, bump, stop, reverse, turn, forward``).
+    * ``learner``: ``alpha`` in (0, 1], ``gamma`` and ``epsilon`` in [0, 1]: defaults
+      for the robot; for a learner other than one-step Q its ``algorithm`` (``qlambda``:
+      with ``trace_decay`` in [0, 1] and ``trace_cutoff`` in [1e-6, 1); ``dyna``: with
+      ``planning_steps``, an integer in 0..:data:`MAX_PLANNING_STEPS`); ``rewards``: the
+      reward of each event (``goal, end_of_world, bump, stop, reverse, turn, forward``),
+      each within +-:data:`MAX_REWARD`.
     * ``model`` (``dyna`` only, optional): the robot's model of its real transitions,
       ``{"pairs": [[state, action, [[next_state, reward, terminal, count], ...]], ...]}``
-      in first-seen order (:class:`Model`). ``koolio-pm export`` writes none: the robot
-      builds its own from real steps.
+      in first-seen order (:class:`Model`; states inside the layout, actions in the
+      action set, rewards within +-:data:`MAX_REWARD`, counts in 1..2**53).
+      ``koolio-pm export`` writes none: the robot builds its own from real steps.
     * ``q_init``: the value of a Q entry never visited; ``episodes``: episodes learned so
       far (simulation + robot); ``n_states``: number of visited states.
     * ``entries``: ``[{"keyword": K, "q": Q}, ...]``, ascending keywords, every action of
-      every visited state; ``greedy``: ``[{"state": S, "action": A}, ...]`` with
-      ``S = K >> action_bits`` (derived data: rebuilt on every save).
+      every visited state, every Q (and ``q_init``) within +-:data:`MAX_Q`; ``greedy``:
+      ``[{"state": S, "action": A}, ...]`` with ``S = K >> action_bits`` (derived data:
+      rebuilt on every save).
     """
     if not isinstance(doc, dict):
         raise _err(source, "", "not a policy file (not a JSON object)")
@@ -570,42 +719,64 @@ def validate_document(doc: Any, source: str = "<policy>") -> None:
         raise _err(
             source, "actions", f"must be a list of {doc['layout']['n_actions']} action names"
         )
-    if not is_number(doc["q_init"]):
-        raise _err(source, "q_init", "must be a finite number")
+    if not is_number(doc["q_init"]) or abs(doc["q_init"]) > MAX_Q:
+        raise _err(source, "q_init", f"must be a finite number within +-{MAX_Q:g}")
     if not _is_int(doc["episodes"]) or not 0 <= doc["episodes"] < 1 << 63:
         raise _err(source, "episodes", "must be an integer >= 0")
     sec = doc.get("rewards") or {}
-    if not isinstance(sec, dict) or not all(is_number(v) for v in sec.values()):
-        raise _err(source, "rewards", "must map names to finite numbers")
+    if not isinstance(sec, dict) or not all(
+        is_number(v) and abs(v) <= MAX_REWARD for v in sec.values()
+    ):
+        raise _err(source, "rewards", f"must map names to finite numbers within +-{MAX_REWARD:g}")
     _check_learner(doc.get("learner") or {}, source)
     _check_entries(doc, source)
     if "model" in doc:
         if (doc.get("learner") or {}).get("algorithm") != "dyna":
             raise _err(source, "model", "only a dyna policy has a model")
+        lay = doc["layout"]
+        layout = Layout([(f["name"], f["levels"]) for f in lay["fields"]], lay["n_actions"])
         try:
-            Model.from_json(doc["model"])
+            Model.from_json(doc["model"], layout)
         except PolicyError as exc:
             raise _err(source, "model", str(exc)) from None
+    bad = nonfinite_item(doc)  # anywhere else (sensors, extra keys): JSON's 1e400
+    if bad is not None:
+        raise _err(source, bad, "not a finite number (JSON could not write it back)")
+
+
+#: The range of each ``learner`` number a policy may hold (the simulator's configuration
+#: has the same): name -> (test, problem).
+LEARNER_RANGES = {
+    "alpha": (lambda v: 0 < v <= 1, "must be in (0, 1]"),
+    "gamma": (lambda v: 0 <= v <= 1, "must be in [0, 1]"),
+    "epsilon": (lambda v: 0 <= v <= 1, "must be in [0, 1]"),
+    "trace_decay": (lambda v: 0 <= v <= 1, "must be in [0, 1]"),
+    "trace_cutoff": (lambda v: 1e-6 <= v < 1, "must be in [1e-06, 1)"),
+    "planning_steps": (
+        lambda v: _is_int(v) and 0 <= v <= MAX_PLANNING_STEPS,
+        f"must be an integer in 0..{MAX_PLANNING_STEPS:,} (simulated updates per real step)",
+    ),
+}
+_PARAMETER_NAMES = frozenset(n for names in ALGORITHMS.values() for n in names)
 
 
 def _check_learner(sec: Any, source: str) -> None:
     if not isinstance(sec, dict):
         raise _err(source, "learner", "must map names to finite numbers")
     algorithm = sec.get("algorithm", "q")
-    if algorithm not in ALGORITHMS:
+    if not isinstance(algorithm, str) or algorithm not in ALGORITHMS:
         raise _err(
             source,
             "learner.algorithm",
-            f"unknown algorithm {algorithm!r} (valid: {', '.join(ALGORITHMS)})",
+            f"unknown algorithm {_show(algorithm)} (valid: {', '.join(ALGORITHMS)})",
         )
     for name, v in sec.items():
         if name != "algorithm" and not is_number(v):
             raise _err(source, f"learner.{name}", "must be a finite number")
-    ranges = {
-        "trace_decay": (lambda v: 0 <= v <= 1, "must be in [0, 1]"),
-        "trace_cutoff": (lambda v: 0 < v < 1, "must be in (0, 1)"),
-        "planning_steps": (lambda v: _is_int(v) and v >= 0, "must be an integer >= 0"),
-    }
+    for name, (ok, problem) in LEARNER_RANGES.items():
+        if name in sec and name not in _PARAMETER_NAMES and not ok(sec[name]):
+            raise _err(source, f"learner.{name}", problem)
+    ranges = LEARNER_RANGES
     for name in ALGORITHMS[algorithm]:
         if name not in sec:
             raise _err(source, f"learner.{name}", f"missing (needed by {algorithm})")
@@ -619,6 +790,58 @@ MAX_KEYWORD_BITS = 64
 MAX_ACTIONS = 64
 MAX_LEVELS = 1 << 16
 MAX_SENSORS = 1024
+#: Largest magnitude of a reward (in ``rewards`` and in a model): the simulator's bound on
+#: every number of a configuration. Rewards of 1e308 overflowed Q values to infinity,
+#: which JSON cannot write.
+MAX_REWARD = 1e15
+#: Largest magnitude of a Q value or ``q_init``: far above anything learned from rewards
+#: of at most 1e15 (1e285 updates away), far enough below the float range (1.8e308) that
+#: an update ``reward + gamma * Q' - Q`` never overflows to infinity.
+MAX_Q = 1e300
+#: Largest count of one outcome, and total of one pair, in a Dyna-Q model: counts and
+#: their sums stay exact in floats (2**53 real steps are centuries of driving).
+MAX_COUNT = 1 << 53
+
+
+def state_problem(state: Any, layout: Layout) -> str | None:
+    """What is wrong with ``state`` as a state key of ``layout`` (None: nothing): an
+    integer >= 0 within the state bits, every field's code below its levels. The
+    simulator's Q-table, Dyna-Q model and policy readers use this one.
+
+    >>> lay = Layout([("A", 3), ("B", 4)], n_actions=5)
+    >>> state_problem(9, lay) is None, state_problem(16, lay), state_problem(13, lay)
+    (True, 'state 16 beyond the 4-bit layout', 'state 13: code 3 of A beyond its 3 levels')
+    """
+    if not _is_int(state) or state < 0:
+        return f"state {_show(state)} is not an integer >= 0"
+    bits = layout.total_bits - layout.action_bits
+    if state >> bits:
+        return f"state {_show(state)} beyond the {bits}-bit layout"
+    codes, _ = layout.decode(state << layout.action_bits)
+    for name, code, levels in zip(layout.names, codes, layout.levels):
+        if code >= levels:
+            return f"state {state}: code {code} of {name} beyond its {levels} levels"
+    return None
+
+
+def action_problem(action: Any, layout: Layout) -> str | None:
+    """What is wrong with ``action`` as an action of ``layout`` (None: nothing)."""
+    if not _is_int(action) or not 0 <= action < layout.n_actions:
+        return f"action {_show(action)} is not an action (0..{layout.n_actions - 1})"
+    return None
+
+
+def outcome_problem(reward: Any, terminal: Any, count: Any) -> str | None:
+    """What is wrong with a Dyna-Q outcome's reward, terminal flag and count (None:
+    nothing): a finite reward of at most :data:`MAX_REWARD` in size, a bool, an integer
+    count in 1..:data:`MAX_COUNT`."""
+    if not is_number(reward) or abs(reward) > MAX_REWARD:
+        return f"reward {_show(reward)} is not a finite number within +-{MAX_REWARD:g}"
+    if not isinstance(terminal, bool):
+        return f"terminal {_show(terminal)} is not true or false"
+    if not _is_int(count) or not 1 <= count <= MAX_COUNT:
+        return f"count {_show(count)} is not an integer in 1..2**53"
+    return None
 
 
 def _check_layout(lay: Any, source: str) -> None:
@@ -686,6 +909,7 @@ def _check_encoding(doc: dict[str, Any], source: str) -> None:
         raise _err(source, "encoding.max_camera_view", "must be a finite number")
     if not isinstance(enc.get("compass_in_state"), bool):
         raise _err(source, "encoding.compass_in_state", "must be true or false")
+    _check_memory(enc.get("memory", NO_MEMORY), source)
     encoder = Encoder(enc)
     for name, ts in (("sonar", encoder.sonar_thresholds), ("camera", encoder.camera_thresholds)):
         if not ts or any(b <= a for a, b in itertools.pairwise(ts)):
@@ -698,6 +922,24 @@ def _check_encoding(doc: dict[str, Any], source: str) -> None:
     if got != encoder.fields():
         raise _err(
             source, "layout.fields", f"do not match the encoding (expected {encoder.fields()!r})"
+        )
+
+
+#: Largest ``encoding.memory.forget_after`` (steps; more than any episode's cap).
+MAX_FORGET_AFTER = 10_000
+
+
+def _check_memory(mem: Any, source: str) -> None:
+    """``encoding.memory``: the memory's settings (:data:`NO_MEMORY`'s keys)."""
+    if not isinstance(mem, dict) or set(mem) - set(NO_MEMORY):
+        raise _err(source, "encoding.memory", f"must map {', '.join(NO_MEMORY)}")
+    for key in ("goal_camera", "eow_camera", "previous_action"):
+        if not isinstance(mem.get(key, False), bool):
+            raise _err(source, f"encoding.memory.{key}", "must be true or false")
+    k = mem.get("forget_after", 0)
+    if not _is_int(k) or not 0 <= k <= MAX_FORGET_AFTER:
+        raise _err(
+            source, "encoding.memory.forget_after", f"must be an integer 0..{MAX_FORGET_AFTER}"
         )
 
 
@@ -714,6 +956,8 @@ def _check_entries(doc: dict[str, Any], source: str) -> None:
         item = f"entries[{i}]"
         if not isinstance(e, dict) or not _is_int(e.get("keyword")) or not is_number(e.get("q")):
             raise _err(source, item, "needs an integer keyword and a finite number q")
+        if abs(e["q"]) > MAX_Q:
+            raise _err(source, item, f"q {_show(e['q'])} beyond +-{MAX_Q:g}")
         kw = e["keyword"]
         if not 0 <= kw < limit or (kw & amask) >= layout.n_actions:
             raise _err(source, item, f"keyword {_show(kw)} out of range for the layout")
@@ -729,6 +973,27 @@ def _check_entries(doc: dict[str, Any], source: str) -> None:
 
 def _is_int(v: Any) -> bool:
     return isinstance(v, int) and not isinstance(v, bool)
+
+
+def nonfinite_item(value: Any) -> str | None:
+    """The path of the first float in ``value`` (nested lists and mappings) that is not
+    finite, or None. JSON's ``1e400`` reads as infinity, which no JSON can write back: a
+    policy (or a table's header) holding one would fail at its next save. The
+    simulator's table reader uses this one too.
+
+    >>> nonfinite_item({"a": [1.0, {"b": float("inf")}]}), nonfinite_item([1, 2.5]) is None
+    ('a[1].b', True)
+    """
+    stack: list[tuple[str, Any]] = [("", value)]
+    while stack:
+        path, v = stack.pop()
+        if isinstance(v, float) and not math.isfinite(v):
+            return path or "(top level)"
+        if isinstance(v, dict):
+            stack.extend((f"{path}.{k}" if path else str(k), x) for k, x in v.items())
+        elif isinstance(v, list):
+            stack.extend((f"{path}[{i}]", x) for i, x in enumerate(v))
+    return None
 
 
 def is_number(v: Any) -> bool:
@@ -822,22 +1087,20 @@ class EpisodeLog:
 
     def __init__(self, path: str) -> None:
         self.path = path
+        check_regular(path)  # a FIFO would block the first row for ever
         new = not os.path.exists(path) or os.path.getsize(path) == 0
         if new:
             self._write(list(LOG_FIELDS))
             return
-        try:
-            with open(path, "rb") as fh:
-                first = fh.readline(1000).rstrip(b"\r\n")
-        except OSError as exc:
-            raise _err(path, "", f"cannot read: {exc.strerror}") from None
+        head = read_regular(path, 1000)
+        first = head.split(b"\n", 1)[0].rstrip(b"\r")
         if first != ",".join(LOG_FIELDS).encode():
             raise _err(path, "line 1", "not a training log (its first line is not the header)")
 
     def _write(self, row: list[str]) -> None:
         buf = io.StringIO()
         csv.writer(buf, lineterminator="\n").writerow(row)
-        with open(self.path, "a", encoding="utf-8", newline="") as fh:
+        with open(self.path, "a", encoding="utf-8", newline="", opener=_open_append) as fh:
             fh.write(buf.getvalue())
             fh.flush()
             os.fsync(fh.fileno())
@@ -865,6 +1128,16 @@ class EpisodeLog:
                 goal,
             ]
         )
+
+
+def _open_append(path: str, flags: int) -> int:
+    """``open()``'s opener of the log: never waiting (a FIFO is an error, not a hang)."""
+    fd = os.open(path, flags | getattr(os, "O_NONBLOCK", 0), 0o666)
+    mode = os.fstat(fd).st_mode
+    if not stat.S_ISREG(mode):
+        os.close(fd)
+        raise _not_regular(path, mode)
+    return fd
 
 
 class RobotLearner:
@@ -993,6 +1266,31 @@ class RobotLearner:
         self.state = None
 
 
+def td_step(
+    q: float,
+    reward: float,
+    next_row: list[float] | None,
+    q_init: float,
+    terminal: bool,
+    alpha: float,
+    gamma: float,
+) -> float:
+    """Table 11's change of a Q value ``q``: ``alpha * (target - q)``, the target
+    ``reward + gamma * max(NextQ)`` (the reward alone after a terminal step, ``q_init``
+    for a next state never visited: ``next_row`` None). The simulator's
+    ``qlearning.td_target`` and ``td_step``, the same operations; :meth:`Policy.update`
+    and :class:`Traces` use it.
+
+    >>> td_step(0.0, -1.0, [0.0, 4.0], -30.0, False, 0.5, 0.9)
+    1.3
+    """
+    if terminal:
+        target = reward
+    else:
+        target = reward + gamma * (max(next_row) if next_row is not None else q_init)
+    return alpha * (target - q)
+
+
 class Traces:
     """Watkins's Q(lambda) eligibility traces: the simulator's ``qlambda.py``, stdlib copy.
 
@@ -1033,12 +1331,7 @@ class Traces:
     ) -> None:
         rows = policy.rows
         row = policy.row(state)
-        if terminal:
-            target = reward
-        else:
-            after = rows.get(nxt)
-            target = reward + gamma * (max(after) if after is not None else policy.q_init)
-        step = alpha * (target - row[action])
+        step = td_step(row[action], reward, rows.get(nxt), policy.q_init, terminal, alpha, gamma)
         entries = self.entries
         entries[state] = [action, 1.0]
         dropped = []
@@ -1107,8 +1400,14 @@ class Model:
         }
 
     @classmethod
-    def from_json(cls, data: Any) -> Model:
-        """A model from its JSON form (None: an empty model); PolicyError when malformed."""
+    def from_json(cls, data: Any, layout: Layout | None = None) -> Model:
+        """A model from its JSON form (None: an empty model); PolicyError when malformed.
+
+        Checked as the simulator's ``dyna.Model.from_bytes`` checks its section: states
+        inside ``layout`` (:func:`state_problem`), actions in its action set, rewards,
+        flags and counts by :func:`outcome_problem`, each pair's total at most
+        :data:`MAX_COUNT`, no pair or outcome twice.
+        """
         model = cls()
         if data is None:
             return model
@@ -1120,19 +1419,34 @@ class Model:
             ok = ok and _is_int(item[0]) and _is_int(item[1]) and bool(item[2])
             if not ok or (item[0], item[1]) in model._index:
                 raise PolicyError(f"pairs[{i}]: expected a new [state, action, [outcome, ...]]")
+            problem = None
+            if layout is not None:
+                problem = state_problem(item[0], layout) or action_problem(item[1], layout)
+            if problem:
+                raise PolicyError(f"pairs[{i}]: {problem}")
             model._index[(item[0], item[1])] = i
             model.pairs.append((item[0], item[1]))
             outs = []
+            seen = set()
             for o in item[2]:
-                good = isinstance(o, list) and len(o) == 4 and _is_int(o[0])
-                good = good and is_number(o[1]) and isinstance(o[2], bool)
-                if not good or not _is_int(o[3]) or o[3] < 1:
+                if not isinstance(o, list) or len(o) != 4 or not _is_int(o[0]):
                     raise PolicyError(
                         f"pairs[{i}]: an outcome is [next_state, reward, terminal, count >= 1]"
                     )
+                problem = outcome_problem(o[1], o[2], o[3])
+                if layout is not None and problem is None:
+                    problem = state_problem(o[0], layout)
+                if problem is None and (o[0], float(o[1]), o[2]) in seen:
+                    problem = f"outcome {_show(o)} repeated"
+                if problem:
+                    raise PolicyError(f"pairs[{i}]: {problem}")
+                seen.add((o[0], float(o[1]), o[2]))
                 outs.append([o[0], float(o[1]), o[2], o[3]])
+            total = sum(o[3] for o in outs)
+            if total > MAX_COUNT:
+                raise PolicyError(f"pairs[{i}]: counts sum to {total}, more than 2**53")
             model.outcomes.append(outs)
-            model.totals.append(sum(o[3] for o in outs))
+            model.totals.append(total)
         return model
 
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from koolio_pymunk import cli
+from koolio_pymunk.apps import cli
 
 
 @pytest.fixture(scope="session")

@@ -13,12 +13,11 @@ from pathlib import Path
 
 import pytest
 
-from koolio_pymunk import cli
-from koolio_pymunk.arena import arena_record, load_arena
-from koolio_pymunk.config import Config
-from koolio_pymunk.qtable import MAGIC, KeywordLayout, QTable
-from koolio_pymunk.sensors import state_fields
-from koolio_pymunk.training import sensor_signature
+from koolio_pymunk.apps import cli
+from koolio_pymunk.learning.qtable import MAGIC, QTable, sensor_signature
+from koolio_pymunk.store.config import Config, state_fields
+from koolio_pymunk.store.keyword import KeywordLayout
+from koolio_pymunk.world.arena import arena_record, load_arena
 
 ROOM = load_arena("room")
 

@@ -20,9 +20,13 @@ import pytest
 import yaml
 from inputs import edit_header, expect_error, header_of, small_table, with_header
 
-from koolio_pymunk import cli
 from koolio_pymunk import robot_runtime as rt
-from koolio_pymunk.arena import (
+from koolio_pymunk.apps import cli
+from koolio_pymunk.apps.export import policy_document, write_policy
+from koolio_pymunk.apps.sweep import load_spec
+from koolio_pymunk.store.config import Config, apply_world
+from koolio_pymunk.store.errors import ArenaError
+from koolio_pymunk.world.arena import (
     MAX_ENTRIES,
     MAX_POLYGON_POINTS,
     MAX_TOTAL_POINTS,
@@ -30,10 +34,6 @@ from koolio_pymunk.arena import (
     load_arena,
     parse_arena,
 )
-from koolio_pymunk.config import Config, apply_world
-from koolio_pymunk.errors import ArenaError
-from koolio_pymunk.export import policy_document, write_policy
-from koolio_pymunk.sweep import load_spec
 
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from koolio_pymunk.extras import VIEW_INSTALL, missing_extra
+from koolio_pymunk.store.extras import VIEW_INSTALL, missing_extra
 
 #: Installed first in the subprocess: the [view] extra's modules are "not installed".
 WITHOUT_VIEW = textwrap.dedent(
@@ -48,7 +48,7 @@ def without_view(code: str, cwd: Path) -> subprocess.CompletedProcess:
 
 
 def koolio_pm_without_view(args: list[str], cwd: Path) -> subprocess.CompletedProcess:
-    return without_view(f"from koolio_pymunk.cli import main; sys.exit(main({args!r}))", cwd)
+    return without_view(f"from koolio_pymunk.apps.cli import main; sys.exit(main({args!r}))", cwd)
 
 
 def test_the_subprocess_really_lacks_the_extra(tmp_path: Path) -> None:

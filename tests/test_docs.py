@@ -8,7 +8,8 @@ and ``tools/``; a page's commands run in order, as a reader would type them, so 
 command finds the files an earlier one wrote. How each kind of command is run:
 
 * ``koolio-pm ...`` (also ``.venv/bin/koolio-pm``, with ``VAR=value`` prefixes): the real
-  ``koolio_pymunk.cli.main`` with the budget cut: ``train`` 2 episodes, ``eval`` 1,
+  ``koolio_pymunk.apps.cli.main`` with the budget cut: ``train`` 2 episodes (``--eval-every``
+  1 with 1-episode checks), ``eval`` 1,
   ``transfer`` 2 training and 2 robot episodes with a 1-episode check after each,
   ``view`` 3 steps or 1 episode with screenshots every step, ``sweep`` on a copy of its
   spec cut to 1 configuration x 1 seed x 2 episodes (the documented spec itself is read
@@ -22,6 +23,7 @@ command finds the files an earlier one wrote. How each kind of command is run:
   separate interpreter (``-I`` for the runtime: as on the robot); ``scp FILES
   robot:DIR/`` copies them into the folder ``robot/DIR`` where the robot's commands run;
 * ``python3 -m venv``, ``pip install``: the set-up, run from nothing by ``.ci/run``;
+  ``source .venv/bin/activate``: this test's interpreter is the venv's already;
   ``python -m pytest``: this test run itself.
 
 Inputs that no documented command makes are supplied: the editor script the docs show
@@ -50,7 +52,7 @@ import yaml
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
 
-from koolio_pymunk import cli
+from koolio_pymunk.apps import cli
 
 REPO = Path(__file__).resolve().parents[1]
 PAGES = ["README.md", *sorted(f"docs/{p.name}" for p in (REPO / "docs").glob("*.md"))]
@@ -104,6 +106,7 @@ LEARNING_TARGETS_BUDGET = (
     ("--paper-episodes", "5"),
     ("--paper-every", "5"),
     ("--random-episodes", "5"),
+    ("--fresh-episodes", "2"),
 )
 
 
@@ -144,6 +147,8 @@ class Reader:
             return self.python(args)
         if program.endswith("pip") and args[:1] == ["install"]:
             return SETUP
+        if program in ("source", ".") and args == [".venv/bin/activate"]:
+            return SETUP
         if program == "scp":
             *files, target = args
             self.robot = self.folder / "robot" / target.split(":", 1)[1]
@@ -157,6 +162,8 @@ class Reader:
         command = args[0]
         if command == "train":
             args = _set(args, "--episodes", "2")
+            if "--eval-every" in args:  # a check after each episode, of one episode
+                args = _set(_set(args, "--eval-every", "1"), "--eval-episodes", "1")
         elif command == "eval":
             args = _set(args, "--episodes", "1")
         elif command == "view":
@@ -201,7 +208,11 @@ class Reader:
 
     def editor_args(self, args: list[str]) -> list[str]:
         if "--script" in args:
-            (self.folder / args[args.index("--script") + 1]).write_text(_editor_script())
+            name = args[args.index("--script") + 1]
+            script = self.folder / name
+            script.parent.mkdir(parents=True, exist_ok=True)
+            shipped = REPO / name  # a script the repository ships runs as it is
+            script.write_text(shipped.read_text() if shipped.exists() else _editor_script())
         if "--screenshot" not in args:
             args = [*args, "--screenshot", "editor.png"]
         return args

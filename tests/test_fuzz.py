@@ -3,7 +3,7 @@ project's own one-line error.
 
 Random mutations of the shipped files (arenas, the configuration profile, a Q-table's
 header, an exported policy), seeded and bounded in count, go through the loaders the
-commands use. Each must either load or raise :class:`~koolio_pymunk.errors.KoolioError`
+commands use. Each must either load or raise :class:`~koolio_pymunk.store.errors.KoolioError`
 (``robot_runtime.PolicyError`` for the robot's own reader) whose message is one line
 naming the file; any other exception fails the test with the seed and the input.
 
@@ -31,11 +31,11 @@ import yaml
 from inputs import header_of, small_table, with_header
 
 from koolio_pymunk import robot_runtime as rt
-from koolio_pymunk.arena import load_arena
-from koolio_pymunk.config import Config, apply_world, load_config
-from koolio_pymunk.errors import KoolioError
-from koolio_pymunk.export import load_any_table, policy_document
-from koolio_pymunk.qtable import QTable
+from koolio_pymunk.apps.export import load_any_table, policy_document
+from koolio_pymunk.learning.qtable import QTable
+from koolio_pymunk.store.config import Config, apply_world, load_config
+from koolio_pymunk.store.errors import KoolioError
+from koolio_pymunk.world.arena import load_arena
 
 REPO = Path(__file__).resolve().parent.parent
 N = int(os.environ.get("KOOLIO_FUZZ_N", "150"))

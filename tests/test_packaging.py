@@ -39,7 +39,7 @@ def test_package_metadata_files() -> None:
     assert (REPO / "LICENSE").read_text().startswith("MIT License\n")
     assert (REPO / "koolio_pymunk" / "py.typed").exists()
     scripts = importlib.metadata.entry_points(group="console_scripts", name="koolio-pm")
-    assert [e.value for e in scripts] == ["koolio_pymunk.cli:main"]
+    assert [e.value for e in scripts] == ["koolio_pymunk.apps.cli:main"]
 
 
 LOADS_NUMBA = "import sys; print('numba' in sys.modules, 'pygame' in sys.modules)"
@@ -57,7 +57,7 @@ LOADS_NUMBA = "import sys; print('numba' in sys.modules, 'pygame' in sys.modules
 )
 def test_commands_without_sensing_do_not_load_numba(command: list[str], tiny_run: Path) -> None:
     code = (
-        "import contextlib, io\nfrom koolio_pymunk.cli import main\n"
+        "import contextlib, io\nfrom koolio_pymunk.apps.cli import main\n"
         "with contextlib.redirect_stdout(io.StringIO()):\n"
         "    try:\n"
         f"        rc = main({command!r})\n"

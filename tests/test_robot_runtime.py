@@ -12,13 +12,19 @@ import numpy as np
 import pytest
 
 from koolio_pymunk import robot_runtime as rt
-from koolio_pymunk.config import Config, LearnerConfig, RewardConfig, SensorConfig
-from koolio_pymunk.export import policy_document, write_policy
-from koolio_pymunk.learner import QLearner
-from koolio_pymunk.qtable import KeywordLayout, QTable
-from koolio_pymunk.rules import judge
-from koolio_pymunk.sensors import state_fields
-from koolio_pymunk.training import LOG_FIELDS, EpisodeResult, LogWriter, sensor_signature
+from koolio_pymunk.apps.export import policy_document, write_policy
+from koolio_pymunk.learning.qlearning import QLearner
+from koolio_pymunk.learning.qtable import QTable, sensor_signature
+from koolio_pymunk.learning.training import LOG_FIELDS, EpisodeResult, LogWriter
+from koolio_pymunk.store.config import (
+    Config,
+    LearnerConfig,
+    RewardConfig,
+    SensorConfig,
+    state_fields,
+)
+from koolio_pymunk.store.keyword import KeywordLayout
+from koolio_pymunk.task.rules import judge
 
 RUNTIME = Path(rt.__file__)
 

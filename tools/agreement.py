@@ -5,16 +5,27 @@ For each arena and world (``--worlds``: the ideal world and ``koolio-real`` by d
 noise-free distances differ by more than 1e-6 in (or whose camera markers differ; with
 realism models on, also each ray's incidence and the other plates in view), the poses
 whose encoded state or readings after the realism models differ, and the poses whose
-every distance is bit-identical (:func:`koolio_pymunk.agreement.compare_backends`);
+every distance is bit-identical (:func:`koolio_pymunk.sensing.agreement.compare_backends`);
 then, in the ideal world, how often the exact-cone sonar model (``sensors.backend:
 cone``) encodes differently from the paper's sub-arcs
-(:func:`koolio_pymunk.agreement.cone_disagreement`). Arena/world pairs run in parallel,
+(:func:`koolio_pymunk.sensing.agreement.cone_disagreement`). Arena/world pairs run in parallel,
 one process each (``--jobs``). Exits 1 on any fast/reference mismatch.
 
+``--moves N`` also checks the compiled swept move (``koolio_pymunk.world.swept_move``)
+against the pymunk world's (``World.move``) on ``N`` random moves per shipped arena and
+per generated arena (``--generated K``, default 4: jittered and turned shipped arenas,
+star-shaped rooms with obstacles; ``koolio_pymunk.world.move_agreement``): the moves
+whose end positions differ in any bit (exit 1 if any), the moves that met a wall or
+started touching one, and the smallest clearance to a wall after a move. ``--poses 0``
+skips the sensors.
+
     .venv/bin/python tools/agreement.py --poses 100000 --out agreement.json
+    .venv/bin/python tools/agreement.py --poses 0 --moves 100000
 
 About 1 ms per pose (the pymunk reference is most of it; 1 to 3 ms with koolio-real's
-models): 100k poses x 3 arenas take about 3 minutes per world on 2 cores.
+models): 100k poses x 3 arenas take about 3 minutes per world on 2 cores. A move
+comparison is 0.15 to 0.35 ms (the clearance checks are most of it): ``--moves 100000``
+takes 2 to 4 minutes on 2 cores.
 """
 
 from __future__ import annotations
@@ -32,7 +43,7 @@ IDEAL = "ideal"
 
 
 def one(arena: str, poses: int, seed: int, noise: str, world: str) -> dict:
-    from koolio_pymunk.agreement import compare_backends, cone_disagreement
+    from koolio_pymunk.sensing.agreement import compare_backends, cone_disagreement
 
     t = time.perf_counter()
     laid = None if world == IDEAL else world
@@ -42,6 +53,58 @@ def one(arena: str, poses: int, seed: int, noise: str, world: str) -> dict:
     if world == IDEAL:
         out["cone"] = cone_disagreement(arena, poses, seed=seed).as_dict()
     return out
+
+
+def one_moves(arena: str | int, moves: int, seed: int, generated: int) -> dict:
+    """Move agreement in a shipped arena (a name) or generated arena number ``arena``."""
+    from koolio_pymunk.world.move_agreement import compare_moves, generated_arenas
+
+    laid = arena if isinstance(arena, str) else generated_arenas(generated, seed)[arena]
+    return compare_moves(laid, moves, seed=seed).as_dict()
+
+
+def run_moves(moves: int, seed: int = 0, jobs: int = 2, generated: int = 4) -> list[dict]:
+    """Move agreement figures per shipped and generated arena (a list of dicts)."""
+    arenas: list[str | int] = [*ARENAS, *range(generated)]
+    with ProcessPoolExecutor(max_workers=jobs) as pool:
+        futures = [pool.submit(one_moves, a, moves, seed, generated) for a in arenas]
+        return [f.result() for f in futures]
+
+
+def print_poses(rows: list[dict]) -> None:
+    print(
+        f"{'arena':>10} {'world':>12} {'poses':>8} {'dist. mismatch':>15} "
+        f"{'state mismatch':>15} {'bit-identical':>14} {'max |diff| in':>14} {'s':>6}"
+    )
+    for r in rows:
+        print(
+            f"{r['arena']:>10} {r['world']:>12} {r['poses']:>8} {r['distance_mismatches']:>15} "
+            f"{r['state_mismatches']:>15} {r['bit_identical']:>14} "
+            f"{r['max_abs_diff']:>14.3g} {r['seconds']:>6}"
+        )
+    cones = [r for r in rows if "cone" in r]
+    if cones:
+        print("exact-cone sonar model (backend: cone) vs the paper's sub-arcs, after encoding:")
+    for r in cones:
+        c = r["cone"]
+        print(
+            f"{r['arena']:>10}: state differs on {c['state_differs']:.1%} of poses; per sonar "
+            f"group {', '.join(f'{g:.1%}' for g in c['group_differs'])}; "
+            f"cone farther than sub-arcs: {c['cone_not_nearer']}"
+        )
+
+
+def print_moves(rows: list[dict]) -> None:
+    print("compiled swept move vs the pymunk world's (end positions, bit for bit):")
+    print(
+        f"{'arena':>12} {'moves':>8} {'mismatches':>11} {'met a wall':>11} "
+        f"{'touching':>9} {'min clearance in':>17} {'s':>6}"
+    )
+    for r in rows:
+        print(
+            f"{r['arena']:>12} {r['moves']:>8} {r['mismatches']:>11} {r['contacts']:>11} "
+            f"{r['touching']:>9} {r['min_clearance']:>17.3g} {r['seconds']:>6}"
+        )
 
 
 def run(
@@ -69,33 +132,22 @@ def main(argv: list[str] | None = None) -> int:
         default=[IDEAL, "koolio-real"],
         help="worlds to check: 'ideal' and world profiles or files (ideal koolio-real)",
     )
+    p.add_argument("--moves", type=int, default=0, help="moves per arena, the motion (0)")
+    p.add_argument("--generated", type=int, default=4, help="generated arenas for --moves (4)")
     p.add_argument("--out", default=None, help="write the figures as JSON here")
     args = p.parse_args(argv)
-    rows = run(args.poses, args.seed, args.jobs, args.noise, tuple(args.worlds))
-    print(
-        f"{'arena':>10} {'world':>12} {'poses':>8} {'dist. mismatch':>15} "
-        f"{'state mismatch':>15} {'bit-identical':>14} {'max |diff| in':>14} {'s':>6}"
-    )
-    for r in rows:
-        print(
-            f"{r['arena']:>10} {r['world']:>12} {r['poses']:>8} {r['distance_mismatches']:>15} "
-            f"{r['state_mismatches']:>15} {r['bit_identical']:>14} "
-            f"{r['max_abs_diff']:>14.3g} {r['seconds']:>6}"
-        )
-    cones = [r for r in rows if "cone" in r]
-    if cones:
-        print("exact-cone sonar model (backend: cone) vs the paper's sub-arcs, after encoding:")
-    for r in cones:
-        c = r["cone"]
-        print(
-            f"{r['arena']:>10}: state differs on {c['state_differs']:.1%} of poses; per sonar "
-            f"group {', '.join(f'{g:.1%}' for g in c['group_differs'])}; "
-            f"cone farther than sub-arcs: {c['cone_not_nearer']}"
-        )
+    rows, moves = [], []
+    if args.poses:
+        rows = run(args.poses, args.seed, args.jobs, args.noise, tuple(args.worlds))
+        print_poses(rows)
+    if args.moves:
+        moves = run_moves(args.moves, args.seed, args.jobs, args.generated)
+        print_moves(moves)
     if args.out:
         with open(args.out, "w", encoding="utf-8") as fh:
-            json.dump(rows, fh, indent=2)
+            json.dump({"poses": rows, "moves": moves} if args.moves else rows, fh, indent=2)
     bad = sum(r["distance_mismatches"] + r["state_mismatches"] for r in rows)
+    bad += sum(r["mismatches"] for r in moves)
     return 1 if bad else 0
 
 

@@ -18,7 +18,7 @@ REPO = Path(__file__).resolve().parents[1]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 
-from koolio_pymunk.cli import main  # noqa: E402
+from koolio_pymunk.apps.cli import main  # noqa: E402
 
 if __name__ == "__main__":
     sys.exit(main(["edit", *sys.argv[1:]]))

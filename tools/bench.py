@@ -11,13 +11,18 @@ Sections (each printed as a table row, all written to ``--out`` as JSON):
 * **train (end to end)**: :func:`training.train` as ``koolio-pm train`` runs it, saving
   the table (file + backup, fsynced) and the log at every episode end;
 * **N robots**: :func:`multi.train_many` with ``--robots`` robots, robot-steps per second;
+* **motion**: the cost of one 12-inch move from the same seeded random free poses of the
+  hallway (near a wall: within 12 in of one): the pymunk world's (``World.move``), the
+  compiled move (``swept_move.move``) called from Python, and per move inside one
+  compiled loop;
 * **algorithms**: the fast single-robot loop with each ``learner.algorithm`` (one-step Q,
   Q(lambda), Dyna-Q with its default ``planning_steps``), the same number of steps from an
   empty table in this one run: the cost per step and its ratio to one-step Q's;
 * **time to competence**, per seed: default ``koolio-pm train`` (hallway, default
   config), a greedy evaluation of 100 episodes after every ``--check-every`` episodes,
   until at least 90 % reach the goal; each seed runs in its own process, which also
-  reports its peak RSS and its Q-table's size next to the paper's dense 113.9 MiB;
+  reports its own peak RSS (:func:`peak_rss_mib`) and its Q-table's size next to the
+  paper's dense 113.9 MiB;
 * **profile**: cProfile of the fast single-robot loop, top 10 functions by own time;
 * **agreement**: fast vs reference sensing on a sample of random poses per arena
   (``tools/agreement.py`` runs the full 100k);
@@ -76,8 +81,8 @@ def rates(steps: int, t: Timer) -> dict:
 
 
 def make_env(backend: str, arena: str = "hallway", world: str | None = None, algorithm: str = "q"):
-    from koolio_pymunk.config import load_config
-    from koolio_pymunk.env import KoolioEnv
+    from koolio_pymunk.store.config import load_config
+    from koolio_pymunk.task.env import KoolioEnv
 
     overrides = {"sensors": {"backend": backend}, "learner": {"algorithm": algorithm}}
     return KoolioEnv(arena, config=load_config(overrides=overrides, world=world))
@@ -89,22 +94,21 @@ def learning_loop(
     """The training loop of ``train`` without file I/O, for at least ``min_steps`` steps."""
     import numpy as np
 
-    from koolio_pymunk.learner import make_learner
-    from koolio_pymunk.qtable import QTable
-    from koolio_pymunk.training import episode_seeds, run_episode
+    from koolio_pymunk.learning.algorithms import make_learner
+    from koolio_pymunk.learning.episodes import Episodes
+    from koolio_pymunk.learning.qtable import QTable
 
     env = make_env(backend, world=world, algorithm=algorithm)
     table = QTable(env.layout, {}, env.config.learner.q_init)
     agent = make_learner(table, env.config.learner, np.random.default_rng(seed))
     env.reset(seed=0)
     env.transition(0)  # compile / warm up
+    loop = Episodes(env, agent, seed)
     steps, e = 0, 0
     with Timer() as t:
         while steps < min_steps:
-            env_seed, rng = episode_seeds(seed, e)
-            agent.begin_episode(e, rng)
-            env.reset(seed=env_seed)
-            steps += run_episode(env, agent, learn=True)[1]
+            loop.begin(e)
+            steps += loop.run().steps
             e += 1
     out = rates(steps, t)
     out["episodes"] = e
@@ -145,8 +149,8 @@ def _write(report: dict, out: str | None) -> int:
 
 
 def end_to_end(episodes: int, folder: Path) -> dict:
-    from koolio_pymunk.qtable import QTableStore
-    from koolio_pymunk.training import train
+    from koolio_pymunk.learning.qtable import QTableStore
+    from koolio_pymunk.learning.training import train
 
     env = make_env("fast")
     with Timer() as t:
@@ -159,8 +163,8 @@ def end_to_end(episodes: int, folder: Path) -> dict:
 
 
 def many(robots: int, episodes: int, folder: Path) -> dict:
-    from koolio_pymunk.multi import train_many
-    from koolio_pymunk.qtable import QTableStore
+    from koolio_pymunk.learning.fleet import train_many
+    from koolio_pymunk.learning.qtable import QTableStore
 
     env = make_env("fast")
     warm = QTableStore(folder / "warm.qtable")
@@ -178,6 +182,76 @@ def many(robots: int, episodes: int, folder: Path) -> dict:
     out = rates(res.steps, t)
     out.update(robots=robots, episodes=episodes, states=len(res.table))
     return out
+
+
+def motion(poses: int, repeats: int = 5) -> dict:
+    """Microseconds per 12-inch move from ``poses`` seeded random free poses of the
+    hallway (best of ``repeats``): ``World.move`` (placing the robot not counted), the
+    compiled move from Python, and the compiled move inside one compiled loop; ``near``
+    rows: poses within 12 in of a wall."""
+    import math
+
+    import numba
+    import numpy as np
+
+    from koolio_pymunk.world.arena import load_arena
+    from koolio_pymunk.world.move_agreement import free_points
+    from koolio_pymunk.world.physics import World
+    from koolio_pymunk.world.segment_query import wall_array
+    from koolio_pymunk.world.swept_move import move
+
+    @numba.njit
+    def loop(walls: np.ndarray, pts: np.ndarray, hs: np.ndarray, out: np.ndarray) -> None:
+        for i in range(pts.shape[0]):
+            out[i, 0], out[i, 1] = move(walls, pts[i, 0], pts[i, 1], hs[i], 12.0, 10.0)
+
+    arena = load_arena("hallway")
+    world = World.from_arena(arena, 10.0)
+    walls = wall_array(world)
+    rng = np.random.default_rng(0)
+    pts = free_points(arena, 10.0, poses, rng)
+    hs = rng.uniform(0.0, 2.0 * math.pi, poses)
+    near = np.array([_near_wall(world, x, y) for x, y in pts])
+    out = np.empty_like(pts)
+    loop(walls, pts[:1], hs[:1], out[:1])  # compile
+
+    def best(fn, sel: np.ndarray) -> float:
+        """Best of ``repeats`` (the time ``fn`` returns, else its whole call's)."""
+        times = []
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            inner = fn(sel)
+            times.append(time.perf_counter() - t0 if inner is None else inner)
+        return round(1e6 * min(times) / max(1, int(sel.sum())), 3)
+
+    def pymunk_moves(sel: np.ndarray) -> float:
+        t = 0.0
+        for (x, y), h in zip(pts[sel], hs[sel]):
+            world.place(0, (x, y), h)
+            t0 = time.perf_counter()
+            world.move(0, 12.0)
+            t += time.perf_counter() - t0
+        return t
+
+    def compiled_calls(sel: np.ndarray) -> None:
+        for (x, y), h in zip(pts[sel], hs[sel]):
+            move(walls, x, y, h, 12.0, 10.0)
+
+    def compiled_loop(sel: np.ndarray) -> None:
+        loop(walls, pts[sel], hs[sel], out[: int(sel.sum())])
+
+    out_rows: dict = {"poses": poses, "near_wall": int(near.sum())}
+    for label, sel in (("all", np.ones(poses, bool)), ("near", near)):
+        out_rows[f"pymunk_us_{label}"] = best(pymunk_moves, sel)
+        out_rows[f"compiled_call_us_{label}"] = best(compiled_calls, sel)
+        out_rows[f"compiled_loop_us_{label}"] = best(compiled_loop, sel)
+    return out_rows
+
+
+def _near_wall(world, x: float, y: float) -> bool:
+    """A wall within 12 in of the robot's edge at ``(x, y)``."""
+    world.place(0, (x, y), 0.0)
+    return world.wall_clearance() < 12.0
 
 
 def profile(min_steps: int) -> list[dict]:
@@ -204,13 +278,28 @@ def profile(min_steps: int) -> list[dict]:
     return out
 
 
+def peak_rss_mib() -> float:
+    """This process's peak resident memory, MiB: Linux's ``VmHWM`` (the peak of this
+    program alone), else ``getrusage``'s ``ru_maxrss``, which on Linux keeps the parent's
+    peak across ``exec``: a competence child started by a bench that had grown bigger
+    reported the bench's memory, not its own."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("VmHWM:"):
+                    return round(int(line.split()[1]) / 1024, 1)
+    except OSError:
+        pass
+    return round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1)
+
+
 def competence(
     seed: int, check_every: int, max_episodes: int, eval_episodes: int, folder: Path
 ) -> dict:
     """Default training until 90 % of greedy evaluation episodes reach the goal."""
-    from koolio_pymunk.env import KoolioEnv
-    from koolio_pymunk.qtable import QTableStore, human_bytes
-    from koolio_pymunk.training import evaluate, train
+    from koolio_pymunk.learning.qtable import QTableStore, human_bytes
+    from koolio_pymunk.learning.training import evaluate, train
+    from koolio_pymunk.task.env import KoolioEnv
 
     env = KoolioEnv("hallway")
     store = QTableStore(folder / f"seed{seed}.qtable")
@@ -241,7 +330,7 @@ def competence(
         "eval_wall_s": round(eval_s, 2),
         "goal_rate": rate,
         "history": history,
-        "peak_rss_mib": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1),
+        "peak_rss_mib": peak_rss_mib(),
         "qtable_states": len(table),
         "qtable_entries": table.entries,
         "qtable_file_bytes": table.nbytes(),
@@ -271,7 +360,7 @@ def competence_subprocess(seed: int, args: argparse.Namespace, folder: Path) -> 
 
 
 def agreement_sample(poses: int) -> list[dict]:
-    from koolio_pymunk.agreement import compare_backends
+    from koolio_pymunk.sensing.agreement import compare_backends
 
     return [compare_backends(a, poses, seed=9).as_dict() for a in ("hallway", "room", "obstacles")]
 
@@ -281,7 +370,7 @@ def arena_check(points: int) -> dict:
     import math
     import random
 
-    from koolio_pymunk.arena import parse_arena
+    from koolio_pymunk.world.arena import parse_arena
 
     rng = random.Random(1)
     out = {"points": points}
@@ -371,6 +460,15 @@ def main(argv: list[str] | None = None) -> int:
         multi = many(args.robots, 300 if q else 3000, folder)
         print(table_line(f"{args.robots} robots robot-steps/s", multi))
         report.update(reference=ref, fast=fast, koolio_real=real, end_to_end=e2e, many=multi)
+
+        mo = report["motion"] = motion(500 if q else 2_000)
+        print(
+            f"  one 12-inch move, us (all / near a wall, {mo['poses']} hallway poses): "
+            f"pymunk world {mo['pymunk_us_all']:.2f} / {mo['pymunk_us_near']:.2f}; compiled, "
+            f"from Python {mo['compiled_call_us_all']:.2f} / {mo['compiled_call_us_near']:.2f}, "
+            f"in a compiled loop {mo['compiled_loop_us_all']:.3f} / "
+            f"{mo['compiled_loop_us_near']:.3f}"
+        )
 
         report["algorithms"] = algorithms_section(q)
 

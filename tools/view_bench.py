@@ -2,7 +2,7 @@
 
 Both learn the same episodes on the same arena with the same seed, in one process, one
 after the other (interleaved ``--repeat`` times, best run of each kept): ``train`` through
-:func:`koolio_pymunk.training.train`, the window through the real window loop
+:func:`koolio_pymunk.learning.training.train`, the window through the real window loop
 (:meth:`ViewerApp.run`: events, clockless ticks of ``clockless_loop_count`` steps, a full
 redraw at most 30 times a second). The two Q-tables must come out byte-identical (same
 work), so the ratio of times is the cost of the window. Prints steps/s of each and the
@@ -42,9 +42,9 @@ class Timer:
 
 
 def run_train(arena: str, episodes: int, seed: int, folder: Path) -> tuple[int, Timer, bytes]:
-    from koolio_pymunk.env import KoolioEnv
-    from koolio_pymunk.qtable import QTableStore
-    from koolio_pymunk.training import train
+    from koolio_pymunk.learning.qtable import QTableStore
+    from koolio_pymunk.learning.training import train
+    from koolio_pymunk.task.env import KoolioEnv
 
     env = KoolioEnv(arena)
     store = QTableStore(folder / "train.qtable")
@@ -56,9 +56,9 @@ def run_train(arena: str, episodes: int, seed: int, folder: Path) -> tuple[int, 
 def run_view(
     arena: str, episodes: int, seed: int, folder: Path, size: tuple[int, int], budget: float
 ) -> tuple[int, Timer, bytes, int, float]:
-    from koolio_pymunk.env import KoolioEnv
-    from koolio_pymunk.viewer.app import ViewerApp
-    from koolio_pymunk.viewer.session import Session
+    from koolio_pymunk.apps.viewer.app import ViewerApp
+    from koolio_pymunk.apps.viewer.session import Session
+    from koolio_pymunk.task.env import KoolioEnv
 
     env = KoolioEnv(arena)
     session = Session(

@@ -1,0 +1,866 @@
+"""``koolio-pm``: the command line.
+
+Every command prints a one-line ``koolio-pm: error: ...`` and exits with status 2 on bad
+input (a malformed arena, a corrupt or mismatched Q-table, a wrong flag, a file that
+cannot be read or written), never a traceback, and leaves existing files as they were.
+Commands that need drawing (``view``, ``plot``, ``edit``) import pygame / matplotlib only
+when they run; without the ``view`` extra they say which extra to install
+(:mod:`koolio_pymunk.store.extras`) and exit 2.
+
+Files: the Q-table and the log default to ``runs/<arena>.qtable`` and ``runs/<arena>.csv``
+(``<arena>``: the built-in name, or the arena file's stem), so runs in different arenas
+never share them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import difflib
+import importlib
+import json
+import os
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import NoReturn
+
+from .. import __version__
+from ..store.errors import KoolioError, located
+from .flags import MAX_EPISODES, episodes_type, float_type, int_type
+from .flags import seed_type as seed_type
+
+DEFAULT_QTABLE = "runs/hallway.qtable"
+DEFAULT_LOG = "runs/hallway.csv"
+DEFAULT_EPISODES = 1500
+#: Most robots of ``train --robots`` (each is a copy of the arena in one pymunk space).
+MAX_ROBOTS = 1024
+
+
+def default_files(arena: str) -> tuple[str, str]:
+    """The default Q-table and log of runs in ``arena`` (a built-in name or a file).
+
+    >>> default_files("room"), default_files("arenas/lab.yaml")
+    (('runs/room.qtable', 'runs/room.csv'), ('runs/lab.qtable', 'runs/lab.csv'))
+    """
+    stem = Path(arena).stem or "arena"
+    return f"runs/{stem}.qtable", f"runs/{stem}.csv"
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors (no usage block), ``koolio-pm: error: ...`` like every
+    other error, and exit status 2; no abbreviated flags (``--episode`` is not
+    ``--episodes``), and a did-you-mean for a mistyped flag or command."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        kwargs["allow_abbrev"] = False  # every parser and subparser: whole flags only
+        super().__init__(*args, **kwargs)
+
+    def error(self, message: str) -> NoReturn:
+        sub = self.prog.removeprefix("koolio-pm").strip()
+        where = f" (see koolio-pm {sub} --help)" if sub else " (see koolio-pm --help)"
+        self.exit(2, f"koolio-pm: error: {' '.join(message.split())}{where}\n")
+
+    def parse_args(self, args=None, namespace=None):  # type: ignore[override]
+        """As argparse's, with a did-you-mean on unknown flags, from the parser of the
+        command they were given to."""
+        ns, extras = self.parse_known_args(args, namespace)
+        if extras:
+            parser = self._command_parser(ns)
+            message = f"unrecognized arguments: {' '.join(extras)}"
+            parser.error(message + did_you_mean(extras, parser))
+        return ns
+
+    def _command_parser(self, ns: argparse.Namespace) -> argparse.ArgumentParser:
+        for action in self._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                return action.choices.get(getattr(ns, "command", None), self)
+        return self
+
+    def _check_value(self, action: argparse.Action, value) -> None:
+        """An unknown command: argparse's message and the closest command."""
+        try:
+            super()._check_value(action, value)
+        except argparse.ArgumentError as exc:
+            close = difflib.get_close_matches(str(value), list(action.choices or ()), n=1)
+            if not close:
+                raise
+            message = f"{exc.message}; did you mean {close[0]!r}?"
+            raise argparse.ArgumentError(action, message) from None
+
+
+def did_you_mean(words: Sequence[str], parser: argparse.ArgumentParser) -> str:
+    """``; did you mean --episodes?`` for the first of ``words`` that looks like a
+    mistyped flag of ``parser`` (empty when none does)."""
+    flags = [o for a in parser._actions for o in a.option_strings if o.startswith("--")]
+    for word in words:
+        if not word.startswith("--"):
+            continue
+        close = difflib.get_close_matches(word.split("=", 1)[0], flags, n=1, cutoff=0.6)
+        if close:
+            return f"; did you mean {close[0]}?"
+    return ""
+
+
+def add_env_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--arena", default="hallway", help="arena file or built-in name (hallway, room, obstacles)"
+    )
+    p.add_argument(
+        "--config",
+        default=None,
+        help="YAML configuration file, or a shipped profile name (paper, ...; see config.py)",
+    )
+    add_world_arg(p)
+    p.add_argument(
+        "--goal",
+        default=None,
+        help="goal name (default: the arena's active goal); 'random': a random goal per episode",
+    )
+    p.add_argument("--seed", type=seed_type, default=0, help="run seed, 0..2**63-1 (default 0)")
+
+
+def add_world_arg(p: argparse.ArgumentParser) -> None:
+    """``--world``: a world profile (realism models, sensor noise) over the configuration."""
+    p.add_argument(
+        "--world",
+        default=None,
+        help="world profile name (e.g. koolio-real) or file laid over the configuration: "
+        "realism models and sensor noise only (default: the ideal world)",
+    )
+
+
+def add_learning_files_args(p: argparse.ArgumentParser) -> None:
+    """``--qtable`` and ``--log``, shared by ``train`` and ``view`` (:func:`resolve_files`)."""
+    p.add_argument(
+        "--qtable",
+        default=None,
+        help="Q-table file, resumed if present; backup beside it (default runs/<arena>.qtable)",
+    )
+    p.add_argument(
+        "--log",
+        default=None,
+        help="per-episode CSV log (default runs/<arena>.csv, or beside a given --qtable: "
+        "X.qtable -> X.csv; '' for none)",
+    )
+    p.set_defaults(files_follow_arena=True)
+
+
+def resolve_files(args: argparse.Namespace) -> None:
+    """Fill in the default ``--qtable`` / ``--log``, refuse empty names.
+
+    For the commands that declare ``files_follow_arena`` (train, eval, view) the defaults
+    follow the arena (:func:`default_files`); a ``--qtable`` given without
+    ``--log`` takes the log beside it (``runs/back.qtable`` -> ``runs/back.csv``), so a new
+    table never meets another run's log.
+    """
+    from ..store.files import check_path
+
+    check_path(args.arena, "--arena")
+    if getattr(args, "files_follow_arena", False):  # train, eval, view (not transfer)
+        table, log = default_files(args.arena)
+        if getattr(args, "log", "") is None:
+            given = args.qtable
+            beside = given is not None and Path(given).name
+            args.log = str(Path(given).with_suffix(".csv")) if beside else log
+        if args.qtable is None:
+            args.qtable = table
+    for flag in ("qtable", "init_qtable", "config", "world"):  # --log '': no log
+        value = getattr(args, flag, None)
+        if value is not None:
+            check_path(value, "--" + flag.replace("_", "-"))
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(
+        prog="koolio-pm",
+        description="Koolio, the FCRAR 2008 delivery robot, learning by Q-learning on pymunk.",
+    )
+    parser.add_argument("--version", action="version", version=f"koolio-pm {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    p = sub.add_parser("train", help="headless episodic Q-learning")
+    add_env_args(p)
+    p.add_argument(
+        "--episodes",
+        type=episodes_type(),
+        default=DEFAULT_EPISODES,
+        help=f"episodes the table holds when the run ends, 0..{MAX_EPISODES:,}: a total, not "
+        "more; a resumed table (e.g. after Ctrl-C) trains only the rest, and one that holds "
+        f"as many already is left as it is (default {DEFAULT_EPISODES})",
+    )
+    add_learning_files_args(p)
+    p.add_argument(
+        "--discard-unfinished",
+        action="store_true",
+        help="on Ctrl-C discard the unfinished episode (Exit Without Save)",
+    )
+    p.add_argument(
+        "--save-every",
+        type=int_type(1, MAX_EPISODES),
+        default=None,
+        metavar="K",
+        help="save the table (and its backup) every K finished episodes instead of after "
+        "each one (the paper's rule, the default with one robot; --robots N: N), and always "
+        "at the end, on Ctrl-C and on SIGTERM",
+    )
+    p.add_argument(
+        "--save-seconds",
+        type=float_type(0.0, 1e9, low_open=True),
+        default=None,
+        metavar="T",
+        help="also save when T seconds passed since the last save",
+    )
+    p.add_argument("--quiet", action="store_true", help="print nothing but errors and warnings")
+    p.add_argument(
+        "--verbose",
+        action="store_true",
+        help="also print the flags and the whole configuration before training",
+    )
+    p.add_argument(
+        "--robots",
+        type=int_type(1, MAX_ROBOTS),
+        default=1,
+        help="robots learning into one shared table, each in its own copy of the arena (default 1)",
+    )
+    p.add_argument(
+        "--init-qtable",
+        default=None,
+        help="start from this table (e.g. one back from the robot) when --qtable "
+        "does not exist yet",
+    )
+    p.add_argument(
+        "--eval-every",
+        type=int,
+        default=None,
+        metavar="N",
+        help="a greedy check every N episodes (of the table's count): X.evals.csv beside "
+        "the log, the best table kept as X.best.qtable (one robot only)",
+    )
+    p.add_argument(
+        "--eval-episodes",
+        type=int,
+        default=None,
+        metavar="M",
+        help="greedy episodes per check (default 100; with --eval-every)",
+    )
+
+    p = sub.add_parser("eval", help="greedy evaluation of a Q-table")
+    add_env_args(p)
+    p.add_argument(
+        "--qtable",
+        default=None,
+        help="Q-table file (.qtable, or a policy exported for the robot; default "
+        "runs/<arena>.qtable)",
+    )
+    p.set_defaults(files_follow_arena=True)
+    p.add_argument(
+        "--episodes", type=episodes_type(), default=100, help="episodes per goal (default 100)"
+    )
+    p.add_argument("--json", action="store_true", help="print the figures as JSON")
+    p.add_argument(
+        "--epsilon",
+        type=float,
+        default=None,
+        metavar="E",
+        help="act epsilon-greedily with E in [0, 1], as the robot does (default 0: greedy)",
+    )
+
+    p = sub.add_parser("check-arena", help="validate an arena file")
+    p.add_argument("file", help="arena file or built-in name")
+    p.add_argument("--robot", default="koolio", help="robot profile for clearance checks")
+
+    p = sub.add_parser("info", help="state-space sizes (paper §5.4.8) and table figures")
+    p.add_argument("--config", default=None, help="YAML configuration file")
+    p.add_argument("--qtable", default=None, help="also describe this Q-table file")
+
+    for name, module in EXTRA_COMMANDS.items():
+        mod = importlib.import_module(module)
+        p = sub.add_parser(name, help=(mod.__doc__ or name).strip().splitlines()[0])
+        mod.add_arguments(p)
+    return parser
+
+
+#: Commands that live in their own modules: each module has ``add_arguments(parser)`` and
+#: ``run(args) -> int`` and imports heavy dependencies (pygame, matplotlib, ray) in ``run``.
+EXTRA_COMMANDS: dict[str, str] = {
+    "view": "koolio_pymunk.apps.viewer.app",
+    "plot": "koolio_pymunk.apps.plotting",
+    "export": "koolio_pymunk.apps.export",
+    "sweep": "koolio_pymunk.apps.sweep",
+    "edit": "koolio_pymunk.apps.editor.command",
+    "transfer": "koolio_pymunk.apps.transfer",
+}
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``koolio-pm``: the command's exit status (0 done, 2 bad input: one line said, 130
+    interrupted). Run as a process (``argv`` None), Ctrl-C raises once and is ignored
+    from then on (:func:`~koolio_pymunk.store.interrupts.raise_once`): a second Ctrl-C
+    while the first is handled never ends in a traceback or cuts a save short."""
+    from ..store import interrupts
+
+    if argv is None:
+        interrupts.command_line()
+    try:
+        code = _main(argv)
+    except KeyboardInterrupt:  # wherever it lands: parsing, imports, a command, a handler
+        print("koolio-pm: interrupted", file=sys.stderr)
+        code = 130
+    if argv is None:  # the status is chosen: a Ctrl-C while Python shuts down changes nothing
+        interrupts.ignore_from_now()
+    return code
+
+
+def _main(argv: Sequence[str] | None) -> int:
+    try:
+        args = build_parser().parse_args(argv)
+    except SystemExit as exc:  # --help, --version (0), or a bad flag (2: one line said)
+        return exc.code if isinstance(exc.code, int) else 0 if exc.code is None else 2
+    try:
+        if hasattr(args, "arena"):
+            resolve_files(args)
+        if args.command in EXTRA_COMMANDS:
+            return int(importlib.import_module(EXTRA_COMMANDS[args.command]).run(args) or 0)
+        return int(COMMANDS[args.command](args) or 0)
+    except KoolioError as exc:
+        print(f"koolio-pm: error: {one_line(str(exc))}", file=sys.stderr)
+        return 2
+    except ModuleNotFoundError as exc:  # pygame / matplotlib without the [view] extra
+        from ..store.extras import missing_extra
+
+        missing = missing_extra(exc, args.command)
+        if missing is None:
+            raise
+        print(f"koolio-pm: error: {missing}", file=sys.stderr)
+        return 2
+    except BrokenPipeError:  # e.g. `koolio-pm info | head -1`: the reader left, not an error
+        # Python's documented recipe: point stdout at devnull so the exit flush is quiet.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
+    except OSError as exc:  # a file error no command turned into a KoolioError itself
+        from ..store.files import os_problem
+
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"koolio-pm: error: {where}{one_line(os_problem(exc))}", file=sys.stderr)
+        return 2
+    except (RecursionError, MemoryError) as exc:
+        what = "nested too deeply" if isinstance(exc, RecursionError) else "out of memory"
+        print(f"koolio-pm: error: {args.command}: input too large ({what})", file=sys.stderr)
+        return 2
+
+
+def one_line(text: str, limit: int = 2000) -> str:
+    """``text`` on one line, at most ``limit`` characters (an error message)."""
+    text = " ".join(text.split())
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+# --- commands ---------------------------------------------------------------------------
+
+
+def _make_env(args: argparse.Namespace):
+    from ..task.env import KoolioEnv
+
+    env = KoolioEnv(arena=args.arena, config=args.config, goal=args.goal, world=args.world)
+    warn_endless(env.config)
+    return env
+
+
+def warn_endless(cfg) -> None:
+    """A warning when episodes may never end (no step cap)."""
+    if cfg.episode.max_steps == 0:
+        print(
+            "warning: episode.max_steps is 0 (no step cap): an episode ends only at the goal "
+            "or off the end of the world, and a policy that never gets there runs for ever",
+            file=sys.stderr,
+        )
+
+
+def _positive(value: int, flag: str) -> None:
+    if value < 0:
+        raise KoolioError(f"{flag}: must be >= 0, got {value}")
+
+
+def cmd_train(args: argparse.Namespace) -> int:
+    from ..learning.qtable import QTableStore
+    from ..learning.training import RunFiles, train
+
+    _positive(args.episodes, "--episodes")
+    if not 1 <= args.robots <= MAX_ROBOTS:
+        raise KoolioError(f"--robots: must be in 1..{MAX_ROBOTS}, got {args.robots}")
+    checks = _eval_every_args(args)
+    env = _make_env(args)
+    say = (lambda s: None) if args.quiet else print
+    store = QTableStore(args.qtable, purpose="koolio-pm train")
+    # Everything that reading can check comes first: an error is the only line printed,
+    # and no file (not even a lock file) is left behind.
+    if args.init_qtable:
+        start = _check_init_table(args.init_qtable, store, args.log, env)
+    else:
+        start = RunFiles.check(env, store, args.log)
+    done = 0 if start is None else int(start.meta.get("episodes", 0))
+    more = max(0, args.episodes - done)
+    say(_train_opening(args, env, start, done, more))
+    if args.verbose:
+        _print_configuration(args, env, say)
+    if args.init_qtable:
+        _seed_table(args.init_qtable, store, args.log, env)
+    if more == 0:
+        store.close()
+        return 0
+    if not args.quiet:
+        announce_compile(env, robots=args.robots)
+    report = None if args.quiet else (lambda line: print(label_progress(line)))
+    if args.robots > 1:
+        from ..learning.fleet import train_many
+
+        result = train_many(
+            env,
+            store,
+            more,
+            args.seed,
+            args.log,
+            robots=args.robots,
+            discard_unfinished=args.discard_unfinished,
+            report=report,
+            save_every=args.save_every,
+            save_seconds=args.save_seconds,
+        )
+    else:
+        result = train(
+            env,
+            store,
+            more,
+            args.seed,
+            args.log,
+            discard_unfinished=args.discard_unfinished,
+            report=report,
+            **checks,
+            save_every=args.save_every or 1,
+            save_seconds=args.save_seconds,
+        )
+    rate = result.goals / max(1, result.episodes_run)
+    say(
+        f"done: {count(result.episodes_run, 'episode')} ({result.goals} at the goal: training goal "
+        f"rate {rate:.1%}, exploring), {result.steps} steps in {result.seconds:.1f} s "
+        f"({result.steps / max(1e-9, result.seconds):.0f} steps/s); {args.qtable} holds "
+        f"{count(result.table.meta.get('episodes', 0), 'episode')}, {len(result.table)} states"
+    )
+    say(f"score the greedy policy (no exploration): {eval_command(args)}")
+    return 130 if result.interrupted else 0
+
+
+def count(n: int, word: str) -> str:
+    """``1 episode``, ``1500 episodes`` (no thousands separator: as the progress lines).
+
+    >>> count(1, "episode"), count(0, "episode"), count(1500, "episode")
+    ('1 episode', '0 episodes', '1500 episodes')
+    """
+    return f"{n} {word}" + ("" if n == 1 else "s")
+
+
+def label_progress(line: str) -> str:
+    """A progress line of ``train`` with its goal rate named for what it is: the share of
+    recent *training* episodes at the goal, with exploration (``eval``'s is greedy).
+
+    >>> label_progress("episode 5/9  goal rate (last 5)  40.0%  steps/s 9  epsilon 0.150")
+    'episode 5/9  training goal rate (exploring; last 5)  40.0%  steps/s 9  epsilon 0.150'
+    """
+    return line.replace("goal rate (last ", "training goal rate (exploring; last ", 1)
+
+
+def eval_command(args: argparse.Namespace) -> str:
+    """The ``koolio-pm eval`` command line that scores the table ``train`` just wrote."""
+    words = ["koolio-pm eval"]
+    if args.arena != "hallway":
+        words.append(f"--arena {args.arena}")
+    if args.qtable != default_files(args.arena)[0]:
+        words.append(f"--qtable {args.qtable}")
+    for flag in ("config", "world"):
+        if getattr(args, flag):
+            words.append(f"--{flag} {getattr(args, flag)}")
+    if args.goal:
+        words.append("--goal " + ("all" if args.goal == "random" else args.goal))
+    return " ".join(words)
+
+
+def describe_run(env) -> str:
+    """``arena hallway, goal 311, the ideal world``: where a run learns or is scored."""
+    goal = "a random goal per episode" if env.random_goal else f"goal {env.goal_name}"
+    world = "the ideal world" if env.world_name == "ideal" else f"world {env.world_name}"
+    return f"arena {env.arena.name}, {goal}, {world}"
+
+
+def _train_opening(args: argparse.Namespace, env, start, done: int, more: int) -> str:
+    """``train``'s first line: the table it writes, new or resumed, and how many
+    episodes it adds (``--episodes`` is the total the table reaches)."""
+    log = f"; log {args.log}" if args.log else ""
+    where = f"{describe_run(env)}, seed {args.seed}{log}"
+    if args.init_qtable:
+        head = (
+            f"new table {args.qtable} from {args.init_qtable} ({len(start)} states, "
+            f"{count(done, 'episode')})"
+        )
+    elif start is None:
+        head = f"new table {args.qtable}"
+    else:
+        head = f"resuming {args.qtable}: {count(done, 'episode')} done"
+    if more == 0 and start is None:
+        return f"--episodes 0: nothing to train, no table written ({args.qtable} is new)"
+    if more == 0 and args.init_qtable:
+        return (
+            f"{head}: nothing to train, --episodes {args.episodes} is the total and it "
+            f"holds {done} already (give a larger --episodes to train further)"
+        )
+    if more == 0:
+        return (
+            f"{args.qtable} already holds {count(done, 'episode')}, and --episodes {args.episodes} "
+            "is the total to reach: nothing to train (give a larger --episodes to train "
+            "further)"
+        )
+    if start is None:
+        return f"{head}: {count(more, 'episode')}; {where}"
+    return f"{head}, {more} more to reach --episodes {args.episodes}; {where}"
+
+
+def _print_configuration(args: argparse.Namespace, env, say) -> None:
+    """``train --verbose``: the flags, the active goal and the whole configuration."""
+    say("koolio-pm train")
+    for key in (
+        "arena",
+        "goal",
+        "episodes",
+        "seed",
+        "qtable",
+        "log",
+        "config",
+        "world",
+        "robots",
+        "init_qtable",
+        "discard_unfinished",
+        "eval_every",
+        "eval_episodes",
+    ):
+        say(f"  {key}: {getattr(args, key)}")
+    say(f"  active goal: {env.goal_name} at {env.world_arena.goal().at}")
+    say("configuration:")
+    for line in env.config.to_yaml().splitlines():
+        say("  " + line)
+
+
+def _eval_every_args(args: argparse.Namespace) -> dict[str, int]:
+    """``--eval-every`` / ``--eval-episodes`` checked, as ``train()``'s arguments."""
+    from ..learning.evaluation import DEFAULT_EVAL_EPISODES
+
+    if args.eval_every is None:
+        if args.eval_episodes is not None:
+            raise KoolioError("--eval-episodes: only with --eval-every N")
+        return {}
+    if args.eval_every < 1:
+        raise KoolioError(f"--eval-every: must be >= 1, got {args.eval_every}")
+    if args.robots > 1:
+        raise KoolioError(
+            "--eval-every: not with --robots N (the many-robot loop has no point between "
+            "episodes to check at); train one robot, or check tables with koolio-pm eval"
+        )
+    if args.eval_episodes is None:
+        args.eval_episodes = DEFAULT_EVAL_EPISODES
+    if args.eval_episodes < 1:
+        raise KoolioError(f"--eval-episodes: must be >= 1, got {args.eval_episodes}")
+    return {"eval_every": args.eval_every, "eval_episodes": args.eval_episodes}
+
+
+def _check_init_table(init_path: str, store, log: str, env):
+    """``--init-qtable``'s checks that need no lock: the table to start from is readable
+    and made for this run's sensors, ``--qtable`` is new, and so is the log."""
+    from ..learning.qtable import check_compatible, sensor_signature
+    from ..store.episode_log import check_log_path, log_rows
+    from .export import load_any_table
+
+    if store.exists():
+        raise KoolioError(
+            f"--init-qtable: {store.path} already exists; it would be resumed "
+            "instead (choose a new --qtable)"
+        )
+    table = load_any_table(init_path)
+    check_compatible(table, env.layout, sensor_signature(env.config), init_path)
+    if log:
+        check_log_path(log, store.path)
+    if log and log_rows(log):
+        raise KoolioError(
+            located(log, "", "holds rows of another run: give --init-qtable a new --log")
+        )
+    return table
+
+
+def _seed_table(init_path: str, store, log: str, env) -> None:
+    """``--init-qtable``: start a new table file from another table (either format). The
+    new table's log must be new too (its episodes continue the other table's count).
+    The checks of :func:`_check_init_table` are made again under the lock."""
+    from ..learning.algorithms import adopt
+    from ..learning.qtable import RECORD_KEYS, check_compatible, sensor_signature
+    from ..learning.training import run_record
+    from ..world.arena import arena_record
+
+    store.lock()
+    try:
+        table = _check_init_table(init_path, store, log, env)
+        check_compatible(  # again, for the warning of a table learned in another arena
+            table, env.layout, sensor_signature(env.config), init_path, arena_record(env.arena)
+        )
+        adopt(table, env.config.learner, init_path)  # its Q values, this run's algorithm
+        for key in RECORD_KEYS:  # from now on it learns for this run's goal and world
+            table.meta.pop(key, None)
+        table.meta.update(run_record(env))
+        store.create(table)
+    except BaseException:
+        store.close()
+        raise
+
+
+def cmd_eval(args: argparse.Namespace) -> int:
+    from ..learning.qtable import check_compatible, sensor_signature
+    from ..learning.training import evaluate
+    from ..world.arena import arena_record
+
+    _positive(args.episodes, "--episodes")
+    eps = args.epsilon
+    if eps is not None and not 0.0 <= eps <= 1.0:
+        raise KoolioError(f"--epsilon: must be in [0, 1], got {eps}")
+    goal_all = args.goal == "all"
+    if goal_all:
+        args.goal = None
+    env = _make_env(args)
+    table = read_table(args.qtable)
+    policy = is_policy_file(args.qtable)
+    check_compatible(
+        table, env.layout, sensor_signature(env.config), args.qtable, arena_record(env.arena)
+    )
+    warn_table(table, args.qtable, env, policy)
+    goals = env.arena.goal_names() if goal_all else [None]
+    announce_compile(env)
+    epsilon = eps or 0.0
+    results = [
+        evaluate(env, table, args.episodes, args.seed, goal=g, epsilon=epsilon) for g in goals
+    ]
+    if args.json:
+        out = [r.as_dict() | {"epsilon": epsilon} for r in results]
+        print(json.dumps(out if goal_all else out[0], sort_keys=True))
+        return 0
+    where = describe_run(env)
+    if goal_all:
+        where = where.replace(f"goal {env.goal_name}", "every goal")
+    how = "greedy evaluation" if not epsilon else f"evaluation (epsilon {epsilon:g})"
+    print(
+        f"{how} of {args.qtable} ({count(table.meta.get('episodes', 0), 'episode')}, "
+        f"{_trained_for(table, env, policy)})"
+    )
+    print(
+        f"  scored in {where}: {count(args.episodes, 'episode')} per goal, seed {args.seed}, "
+        f"epsilon {epsilon:g}, no learning"
+    )
+    print(
+        f"  {'goal':>6} {'greedy goal rate':>16} {'end of world':>13} {'wrong door':>11} "
+        f"{'step cap':>9} {'mean steps':>11} {'mean bumps':>11} {'mean return':>12}"
+    )
+    for r in results:
+        print(
+            f"  {r.goal:>6} {r.goal_rate:>16.1%} {r.end_of_world_rate:>13.1%} "
+            f"{r.wrong_door_rate:>11.1%} {r.truncated_rate:>9.1%} {r.mean_steps:>11.1f} "
+            f"{r.mean_bumps:>11.1f} {r.mean_reward:>12.1f}"
+        )
+    if goal_all:
+        mean = sum(r.goal_rate for r in results) / len(results)
+        print(f"  {'all':>6} {mean:>16.1%}")
+    return 0
+
+
+def read_table(path: str):
+    """The table ``eval`` scores: a ``.qtable`` file (its backup when it is damaged or
+    missing, with one warning line, as ``train`` does) or an exported policy."""
+    from ..learning.qtable import QTableStore
+    from .export import load_any_table
+
+    p = Path(path)
+    if is_policy_file(p) or p.is_dir():
+        return load_any_table(p)  # a policy; or its one-line error ("is a folder")
+    table = QTableStore(p).peek(warn=True)
+    if table is None:
+        raise KoolioError(
+            located(
+                str(p),
+                "",
+                "no such Q-table yet: run koolio-pm train first (it writes "
+                f"{DEFAULT_QTABLE} by default; --qtable names another)",
+            )
+        )
+    return table
+
+
+def is_policy_file(path: str | Path) -> bool:
+    """True when ``path`` names an exported policy (``.json``, or JSON inside), not a
+    ``.qtable``."""
+    p = Path(path)
+    return p.suffix == ".json" or _starts_with_brace(p)
+
+
+def _starts_with_brace(p: Path) -> bool:
+    """True when ``p`` is a file whose first non-blank byte is ``{`` (a policy file)."""
+    try:
+        with open(p, "rb") as fh:
+            return fh.read(64).lstrip()[:1] == b"{"
+    except OSError:
+        return False
+
+
+def _trained_for(table, env, policy: bool = False) -> str:
+    """``trained for goal 311 in the ideal world``, from what the table records (a
+    policy file records neither)."""
+    from ..learning.qtable import describe_goal, describe_world
+    from ..learning.training import arena_goal
+
+    if policy:
+        return "a policy file: its goal and world are not recorded"
+    goal = describe_goal(table.meta, arena_goal(env))
+    return f"trained for {goal} in {describe_world(table.meta)}"
+
+
+def warn_table(table, source: str, env, policy: bool = False) -> None:
+    """Warnings before scoring a table: it holds no episodes, or it was trained in another
+    world than the one it is scored in (a transfer: its figure is not its training's;
+    unknown for a ``policy`` file)."""
+    from ..learning.qtable import describe_world
+    from ..learning.training import world_label
+
+    if int(table.meta.get("episodes", 0)) == 0:
+        print(
+            f"warning: {source}: holds 0 episodes (an empty table: its greedy policy is "
+            "arbitrary); train it first",
+            file=sys.stderr,
+        )
+    world = world_label(env.world_name)
+    if not policy and table.meta.get("world", "ideal") != world:
+        here = {} if world == "ideal" else {"world": world}
+        print(
+            f"warning: {source}: trained in {describe_world(table.meta)}, scored here in "
+            f"{describe_world(here)}",
+            file=sys.stderr,
+        )
+
+
+def cmd_check_arena(args: argparse.Namespace) -> int:
+    from ..store.config import ROBOT_PROFILES
+    from ..world.arena import load_arena
+
+    if args.robot not in ROBOT_PROFILES:
+        raise KoolioError(
+            f"--robot: unknown profile {args.robot!r} (valid: {', '.join(ROBOT_PROFILES)})"
+        )
+    arena = load_arena(args.file, ROBOT_PROFILES[args.robot])
+    xmin, ymin, xmax, ymax = arena.bounds()
+    print(
+        f"{arena.source}: ok: '{arena.name}', {len(arena.walls)} wall points, "
+        f"{len(arena.obstacles)} obstacles, {len(arena.goals)} goals "
+        f"(active {arena.active_goal}), {len(arena.end_of_world)} end-of-world markers, "
+        f"{xmax - xmin:g} x {ymax - ymin:g} in"
+    )
+    return 0
+
+
+def cmd_info(args: argparse.Namespace) -> int:
+    from ..learning.qtable import describe_goal, describe_world, human_bytes
+    from ..store.config import load_config, state_fields
+    from ..store.keyword import PAPER_ORIGINAL_FIELDS, KeywordLayout
+    from .export import load_any_table
+
+    cfg = load_config(args.config)
+    paper = KeywordLayout(PAPER_ORIGINAL_FIELDS)
+    now = KeywordLayout(tuple(state_fields(cfg.sensors)))
+    print("State space (paper §5.4.8; dense tables of 8-byte doubles):")
+    for title, lay in (
+        ("paper's first design (compass, 6 cameras x 4, 8 sonars x 5)", paper),
+        ("this configuration", now),
+    ):
+        print(f"  {title}:")
+        print(f"    states  {lay.n_states:>16,}")
+        print(f"    entries {lay.n_entries:>16,}  (x {lay.n_actions} actions)")
+        print(f"    dense   {human_bytes(lay.dense_bytes()):>16}")
+    print(f"Keyword ({now.total_bits} bits, Table 12):")
+    print("  " + " | ".join(f"{n}<<{s}" for (n, _), s in zip(now.fields, now.shifts)) + " | Action")
+    if args.qtable:
+        table = load_any_table(args.qtable)
+        share = table.entries / table.layout.n_entries
+        print(
+            f"Q-table {args.qtable}: {len(table):,} states visited, {table.entries:,} entries "
+            f"({share:.3%} of dense), {human_bytes(table.nbytes())} in the file, "
+            f"{table.meta.get('episodes', 0)} episodes"
+        )
+        arena = table.meta.get("arena")
+        if isinstance(arena, dict):
+            print(
+                f"  learned in arena {arena.get('name')} for {describe_goal(table.meta)}, "
+                f"in {describe_world(table.meta)}"
+            )
+        rec = table.meta.get("algorithm")
+        if isinstance(rec, dict):
+            params = ", ".join(f"{k} {v}" for k, v in rec.items() if k != "name")
+            sections = ", ".join(f"{k} {human_bytes(len(v))}" for k, v in table.sections.items())
+            print(
+                f"  learned with {rec.get('name')} ({params})"
+                + (f"; {sections}" if sections else "")
+            )
+    return 0
+
+
+def _cached(dispatcher) -> bool:
+    """True when numba's cache holds a compiled version of ``dispatcher`` that is valid for
+    its source as it is now (numba's own index check; False when that cannot be told)."""
+    try:
+        return bool(dispatcher._cache._cache_file._load_index())
+    except Exception:  # numba's internals moved: say it may compile
+        return False
+
+
+def kernels_to_compile(env, robots: int = 1) -> bool:
+    """True when a run in ``env`` will compile numba kernels first (a cold cache: the
+    first run after installing or changing them): the entry points of the sensing a run
+    uses, looked up in numba's cache index without compiling anything."""
+    sensors = env.sensors
+    if not getattr(sensors, "fused", False):  # the pymunk reference: nothing compiled
+        return False
+    if getattr(sensors.kernel, "real_on", False):
+        from ..sensing import realism_kernel
+
+        entries = [realism_kernel.sense_realism]
+    else:
+        from ..sensing import encoding_kernel, ray_kernel
+
+        entries = [ray_kernel.sense_one, encoding_kernel.readout]
+    if robots > 1:
+        from ..learning import fleet_kernel
+
+        entries.append(fleet_kernel.learn)
+    return not all(_cached(f) for f in entries)
+
+
+def announce_compile(env, robots: int = 1) -> None:
+    """One line before the one-time compile of the sensing kernels, when it is due."""
+    if kernels_to_compile(env, robots):
+        print(
+            "compiling the sensing kernels (first run only, about 5-10 s); "
+            "later runs load them from the cache",
+            file=sys.stderr,
+            flush=True,
+        )
+
+
+COMMANDS = {
+    "train": cmd_train,
+    "eval": cmd_eval,
+    "check-arena": cmd_check_arena,
+    "info": cmd_info,
+}
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,107 @@
+"""The learning algorithms of ``learner.algorithm``: which class learns, and what a table records.
+
+:func:`make_learner` builds the learner of a configuration (``q``: one-step Q,
+:class:`~koolio_pymunk.learning.qlearning.QLearner`; ``qlambda``:
+:class:`~koolio_pymunk.learning.qlambda.QLambda`; ``dyna``:
+:class:`~koolio_pymunk.learning.dyna.DynaQ`). A Q-table's header records the algorithm
+it was learned with (:func:`algorithm_record`); a run continues a table only with that
+algorithm (:func:`attach`), and ``--init-qtable`` starts a new table from another's Q
+values with any algorithm (:func:`adopt`).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..store.config import LearnerConfig
+from ..store.errors import QTableError, located
+from .qlearning import QLearner
+from .qtable import QTable
+
+#: Parameters of each algorithm recorded in the Q-table header (none for ``q``).
+PARAMETERS: dict[str, tuple[str, ...]] = {
+    "q": (),
+    "qlambda": ("trace_decay", "trace_cutoff"),
+    "dyna": ("planning_steps",),
+}
+
+
+def make_learner(
+    table: QTable, cfg: LearnerConfig, rng: np.random.Generator, source: str = "<table>"
+) -> QLearner:
+    """The learner of ``cfg.algorithm`` on ``table`` (``source`` names the table's file in
+    errors about the data it keeps there)."""
+    if cfg.algorithm == "qlambda":
+        from .qlambda import QLambda
+
+        return QLambda(table, cfg, rng)
+    if cfg.algorithm == "dyna":
+        from .dyna import DynaQ
+
+        return DynaQ(table, cfg, rng, source)
+    return QLearner(table, cfg, rng)
+
+
+def algorithm_record(cfg: LearnerConfig) -> dict[str, Any] | None:
+    """What a Q-table header records of ``cfg``'s algorithm: None for one-step Q.
+
+    >>> algorithm_record(LearnerConfig(algorithm="dyna", planning_steps=5))
+    {'name': 'dyna', 'planning_steps': 5}
+    >>> algorithm_record(LearnerConfig()) is None
+    True
+    """
+    if cfg.algorithm == "q":
+        return None
+    return {"name": cfg.algorithm} | {k: getattr(cfg, k) for k in PARAMETERS[cfg.algorithm]}
+
+
+def table_algorithm(table: QTable, source: str) -> str:
+    """The algorithm a table was learned with (``q`` when its header names none)."""
+    rec = table.meta.get("algorithm")
+    if rec is None:
+        return "q"
+    name = rec.get("name") if isinstance(rec, dict) else None
+    if not isinstance(name, str) or name not in PARAMETERS:
+        shown = repr(rec) if len(repr(rec)) <= 60 else repr(rec)[:57] + "..."
+        raise QTableError(located(source, "algorithm", f"unknown learning algorithm {shown}"))
+    return str(rec["name"])
+
+
+def attach(table: QTable, cfg: LearnerConfig, source: str) -> None:
+    """Check a run of ``cfg``'s algorithm may continue ``table``, and record it.
+
+    A table that has learned something continues only with the algorithm it was learned
+    with, so that a resumed run continues exactly (its model, if any, is in the table);
+    parameters may change. ``--init-qtable`` starts a new table from another's Q values
+    with any algorithm (:func:`adopt`).
+    """
+    theirs = table_algorithm(table, source)
+    learned = bool(table.rows) or int(table.meta.get("episodes", 0)) > 0
+    if learned and theirs != cfg.algorithm:
+        raise QTableError(
+            located(
+                source,
+                "algorithm",
+                f"table learned with {theirs}, this run uses {cfg.algorithm} (start a new "
+                f"table from its Q values: --init-qtable {source} --qtable NEW)",
+            )
+        )
+    _record(table, cfg)
+
+
+def adopt(table: QTable, cfg: LearnerConfig, source: str) -> None:
+    """Make ``table`` (e.g. ``--init-qtable``'s) a table of ``cfg``'s algorithm: its Q
+    values are kept, data of another algorithm (a Dyna model) is dropped."""
+    if table_algorithm(table, source) != cfg.algorithm:
+        table.sections.clear()
+    _record(table, cfg)
+
+
+def _record(table: QTable, cfg: LearnerConfig) -> None:
+    rec = algorithm_record(cfg)
+    if rec is None:
+        table.meta.pop("algorithm", None)
+    else:
+        table.meta["algorithm"] = rec

@@ -1,0 +1,166 @@
+"""Dyna-Q's model of the transitions seen, and its section of the Q-table file.
+
+The model itself (what it keeps, how it is drawn from) is described in
+:mod:`koolio_pymunk.learning.dyna`; here it is read and written. It lives below the
+Q-table (:mod:`koolio_pymunk.learning.qtable` checks a table's ``dyna_model`` section
+with :meth:`Model.from_bytes` when it reads the file, so a bad model is refused with the
+table, before a run writes anything).
+
+**Checks** (the robot runtime's ``Model.from_json`` makes the same ones, with the same
+functions: :func:`~koolio_pymunk.robot_runtime.state_problem`,
+:func:`~koolio_pymunk.robot_runtime.action_problem`,
+:func:`~koolio_pymunk.robot_runtime.outcome_problem`): every state and next state inside
+the table's keyword layout (its bits, and each field's code below its levels), every
+action in the action set, rewards finite and at most 1e15 in size (the configuration's
+bound), terminal flags 0 or 1, counts in 1..2**53 and each pair's total too, no pair or
+outcome twice. A reward of NaN, a state beyond the layout or a count of 2**64 - 1 was
+accepted and poisoned the next save.
+"""
+
+from __future__ import annotations
+
+import struct
+
+import numpy as np
+
+from .. import robot_runtime as rt
+from ..store.errors import QTableError, located
+from ..store.keyword import KeywordLayout
+
+#: Name of the model's section in the Q-table file.
+SECTION = "dyna_model"
+
+
+def robot_layout(layout: KeywordLayout) -> rt.Layout:
+    """The robot runtime's :class:`~koolio_pymunk.robot_runtime.Layout` of ``layout``."""
+    return rt.Layout(layout.fields, layout.n_actions)
+
+
+class Model:
+    """Every (state, action) pair seen, with the counted outcomes of each (module doc)."""
+
+    def __init__(self) -> None:
+        self.pairs: list[tuple[int, int]] = []
+        """``(state, action)`` in first-seen order."""
+        self.outcomes: list[list[list]] = []
+        """Per pair: ``[next_state, reward, terminal, count]`` in first-seen order."""
+        self.totals: list[int] = []
+        """Per pair: the sum of its counts."""
+        self._pair: dict[tuple[int, int], int] = {}
+        self._outcome: list[dict[tuple[int, float, bool], list]] = []
+
+    def __len__(self) -> int:
+        return len(self.pairs)
+
+    def record(self, state: int, action: int, reward: float, nxt: int, terminal: bool) -> None:
+        """Count one real transition."""
+        i = self._pair.get((state, action))
+        if i is None:
+            i = len(self.pairs)
+            self._pair[(state, action)] = i
+            self.pairs.append((state, action))
+            self.outcomes.append([])
+            self.totals.append(0)
+            self._outcome.append({})
+        key = (nxt, reward, terminal)
+        out = self._outcome[i].get(key)
+        if out is None:
+            out = [nxt, reward, terminal, 0]
+            self._outcome[i][key] = out
+            self.outcomes[i].append(out)
+        out[3] += 1
+        self.totals[i] += 1
+
+    def sample(self, u1: float, u2: float) -> tuple[int, int, float, int, bool]:
+        """``(state, action, reward, next_state, terminal)`` for draws ``u1, u2`` in [0, 1)."""
+        i = int(u1 * len(self.pairs))
+        x = u2 * self.totals[i]
+        seen = 0
+        for out in self.outcomes[i]:
+            seen += out[3]
+            if x < seen:
+                break
+        state, action = self.pairs[i]
+        return state, action, out[1], out[0], out[2]
+
+    def __bytes__(self) -> bytes:
+        n = len(self.pairs)
+        flat = [o for outs in self.outcomes for o in outs]
+        parts = [
+            struct.pack("<QQ", n, len(flat)),
+            np.array([p[0] for p in self.pairs], "<u8").tobytes(),
+            np.array([p[1] for p in self.pairs], "<u8").tobytes(),
+            np.array([len(outs) for outs in self.outcomes], "<u8").tobytes(),
+            np.array([o[0] for o in flat], "<u8").tobytes(),
+            np.array([o[1] for o in flat], "<f8").tobytes(),
+            np.array([int(o[2]) for o in flat], "<u8").tobytes(),
+            np.array([o[3] for o in flat], "<u8").tobytes(),
+        ]
+        return b"".join(parts)
+
+    @classmethod
+    def from_bytes(
+        cls, data: bytes, source: str = "<model>", layout: KeywordLayout | None = None
+    ) -> Model:
+        """The model of a ``dyna_model`` section; QTableError when malformed. With
+        ``layout`` (the table's), every state and action is checked against it too
+        (module doc)."""
+        model = cls()
+        if not data:
+            return model
+        bad = QTableError(located(source, SECTION, "malformed Dyna-Q model"))
+        if len(data) < 16:
+            raise bad
+        n, m = struct.unpack_from("<QQ", data)
+        if len(data) != 16 + 8 * (3 * n + 4 * m):
+            raise bad
+        arrays = []
+        pos = 16
+        for count, dtype in ((n, "<u8"),) * 3 + ((m, "<u8"), (m, "<f8"), (m, "<u8"), (m, "<u8")):
+            arrays.append(np.frombuffer(data, dtype, count, pos).tolist())
+            pos += 8 * count
+        states, actions, sizes, nexts, rewards, terminals, counts = arrays
+        if sum(sizes) != m or any(s < 1 for s in sizes):
+            raise bad
+        _check_entries(arrays, source, layout)
+        k = 0
+        for i, (state, action, size) in enumerate(zip(states, actions, sizes)):
+            model._pair[(state, action)] = i
+            model.pairs.append((state, action))
+            outs = [
+                [nexts[j], rewards[j], bool(terminals[j]), counts[j]] for j in range(k, k + size)
+            ]
+            model.outcomes.append(outs)
+            model.totals.append(sum(counts[k : k + size]))
+            model._outcome.append({(o[0], o[1], o[2]): o for o in outs})
+            k += size
+        if len(model._pair) != n or any(
+            len(d) != len(o) for d, o in zip(model._outcome, model.outcomes)
+        ):
+            raise bad
+        return model
+
+
+def _check_entries(arrays: list[list], source: str, layout: KeywordLayout | None) -> None:
+    """The checks of the module doc on the section's arrays, pair by pair."""
+    states, actions, sizes, nexts, rewards, terminals, counts = arrays
+    lay = robot_layout(layout) if layout is not None else None
+    k = 0
+    for i, (state, action, size) in enumerate(zip(states, actions, sizes)):
+        problem = None
+        if lay is not None:
+            problem = rt.state_problem(state, lay) or rt.action_problem(action, lay)
+        for j in range(k, k + size):
+            if problem:
+                break
+            if terminals[j] > 1:
+                problem = f"terminal {terminals[j]} is not 0 or 1"
+            else:
+                problem = rt.outcome_problem(rewards[j], bool(terminals[j]), counts[j])
+            if problem is None and lay is not None:
+                problem = rt.state_problem(nexts[j], lay)
+        if problem is None and sum(counts[k : k + size]) > rt.MAX_COUNT:
+            problem = "its counts sum to more than 2**53"
+        if problem:
+            raise QTableError(located(source, SECTION, f"pair {i}: {problem}"))
+        k += size

@@ -1,0 +1,210 @@
+"""The episode loop: one robot, one episode, one step at a time (paper §5.4.6 and §5.4.8).
+
+Every place that runs episodes of one robot runs them here: ``koolio-pm train`` and
+``eval`` (:mod:`koolio_pymunk.learning.training`), the window's learning and watching
+(:mod:`koolio_pymunk.apps.viewer.session`) and the robot runtime's episodes of
+``koolio-pm transfer`` (:mod:`koolio_pymunk.apps.transfer`). Many robots on one table
+(:mod:`koolio_pymunk.learning.fleet`) keep their own compiled inner loop but take the
+seeds, the episode's row and the bookkeeping from here.
+
+**One step** (:meth:`Episodes.step`), in the paper's order:
+
+1. the agent chooses an action for the current state (epsilon-greedy for the learners);
+2. the environment simulates it: move, sense, judge (reward and end of episode), step
+   cap (:meth:`~koolio_pymunk.task.env.KoolioEnv.simulate`);
+3. the agent learns from the step, bootstrapping from the state the action led to;
+4. then, and only then, the auto-rescue check (§5.4.8:
+   :meth:`~koolio_pymunk.task.env.KoolioEnv.rescue_check`); the next step starts from the
+   rescued state.
+
+**Seeding.** Episode ``e`` of a run with seed ``s`` resets the environment with a seed
+derived from ``(s, e, stream)`` and gives the agent a generator derived from
+``(s, e, stream, 1)`` (:func:`episode_seeds`). Training, evaluation and the robot's
+episodes use different streams, so they never share starts. The same seed therefore gives
+the same episodes, and a run resumed at episode ``e`` continues exactly like an
+uninterrupted one.
+
+**The agent** is anything with the learner interface
+(:class:`~koolio_pymunk.learning.qlearning.QLearner`): ``epsilon``,
+``begin_episode(episode, rng)``, ``act(state)``, ``observe(state, action, reward,
+next_state, terminal)``; it may also have ``relocated(state)``, called after a rescue
+moved the robot.
+
+>>> from koolio_pymunk.learning.qlearning import QLearner
+>>> from koolio_pymunk.learning.qtable import QTable
+>>> from koolio_pymunk.task.env import KoolioEnv
+>>> env = KoolioEnv("room", max_steps=20)
+>>> agent = QLearner(QTable(env.layout), env.config.learner, None)
+>>> episodes = Episodes(env, agent, seed=0)
+>>> episodes.begin(0)
+>>> result = episodes.run()
+>>> result.episode, result.steps, result.outcome in ("goal", "end_of_world", "truncated")
+(0, 20, True)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+import numpy as np
+
+from ..task.env import KoolioEnv
+
+#: Seed streams: training, evaluation and robot episodes of one seed never share starts.
+TRAIN_STREAM, EVAL_STREAM, ROBOT_STREAM = 0, 1, 2
+#: The outcome of an episode stopped before its end (Ctrl-C, Exit).
+INTERRUPTED = "interrupted"
+#: The outcome of an episode cut by the step cap.
+TRUNCATED = "truncated"
+
+
+def episode_seeds(
+    seed: int, episode: int, stream: int = TRAIN_STREAM
+) -> tuple[int, np.random.Generator]:
+    """The environment seed and the agent's generator for ``episode`` of run ``seed``.
+
+    >>> episode_seeds(0, 0)[0] == episode_seeds(0, 0)[0] != episode_seeds(0, 1)[0]
+    True
+    """
+    env_seed = int(np.random.SeedSequence([seed, episode, stream]).generate_state(1)[0])
+    return env_seed, np.random.default_rng([seed, episode, stream, 1])
+
+
+@dataclass
+class EpisodeResult:
+    """One episode as the training log records it (one CSV row,
+    :mod:`koolio_pymunk.store.episode_log`)."""
+
+    episode: int
+    reward: float
+    steps: int
+    bumps: int
+    outcome: str
+    rescued: bool
+    epsilon: float
+    goal: str
+    realism: tuple[float, ...] = ()
+    """The realism parameters drawn for the episode (domain randomization), in the order
+    of the log's ``realism.*`` columns."""
+
+    def row(self) -> list[str]:
+        """The log row: the columns of ``LOG_FIELDS``, then the ``realism.*`` draws."""
+        return [
+            str(self.episode),
+            f"{self.reward:.6g}",
+            str(self.steps),
+            str(self.bumps),
+            self.outcome,
+            str(int(self.rescued)),
+            f"{self.epsilon:.6g}",
+            self.goal,
+            *(repr(v) for v in self.realism),
+        ]
+
+
+def realism_values(env: KoolioEnv) -> tuple[float, ...]:
+    """The episode's domain-randomization draw, in log column order (empty: none)."""
+    return tuple(env.realism_draw[k] for k in env.randomizer.keys)
+
+
+class Agent(Protocol):
+    """What :class:`Episodes` asks of an agent (the learners of
+    :mod:`koolio_pymunk.learning.algorithms`, or the robot runtime's learner)."""
+
+    epsilon: float
+
+    def begin_episode(self, episode: int, rng: np.random.Generator) -> None: ...
+
+    def act(self, state: int) -> int: ...
+
+    def observe(
+        self, state: int, action: int, reward: float, next_state: int, terminal: bool
+    ) -> None: ...
+
+
+class Episodes:
+    """The episodes of one robot in ``env``, driven by ``agent`` (module doc).
+
+    ``learn`` False only watches (no :meth:`Agent.observe`); ``epsilon``, when given,
+    replaces the schedule's value at every episode start (0: the greedy policy).
+    :meth:`begin` starts an episode, :meth:`step` makes one step and returns the outcome
+    when the episode ended (``None`` while it runs), :meth:`run` steps to the end,
+    :meth:`result` is the episode's log row.
+    """
+
+    def __init__(
+        self,
+        env: KoolioEnv,
+        agent: Agent,
+        seed: int,
+        stream: int = TRAIN_STREAM,
+        learn: bool = True,
+        epsilon: float | None = None,
+    ) -> None:
+        self.env = env
+        self.agent = agent
+        self.seed = seed
+        self.stream = stream
+        self.learn = learn
+        self.epsilon = epsilon
+        self.episode = -1
+        """The number of the episode begun last (-1: none yet)."""
+        self.outcome: str | None = None
+        """How the current episode ended (``None`` while it runs)."""
+
+    def begin(self, episode: int, options: dict[str, Any] | None = None) -> None:
+        """Start ``episode``: its seeds, the env's reset, the agent's episode start."""
+        env_seed, rng = episode_seeds(self.seed, episode, self.stream)
+        self.env.reset(seed=env_seed, options=options)
+        self.agent.begin_episode(episode, rng)  # after the reset: it may read the start
+        if self.epsilon is not None:
+            self.agent.epsilon = self.epsilon
+        self.episode = episode
+        self.outcome = None
+
+    def step(self) -> str | None:
+        """One step: act -> simulate -> learn -> rescue check; the outcome at the end."""
+        env, agent = self.env, self.agent
+        state = env.state_key
+        action = agent.act(state)
+        nxt, reward, terminated, truncated = env.simulate(action)
+        if self.learn:  # from the state the action led to, before any rescue (§5.4.8)
+            agent.observe(state, action, reward, nxt, terminated)
+        if env.rescue_check():
+            relocated = getattr(agent, "relocated", None)
+            if relocated is not None:
+                relocated(env.state_key)
+        if terminated:
+            self.outcome = env.judgement.event  # type: ignore[union-attr]
+        elif truncated:
+            self.outcome = TRUNCATED
+        return self.outcome
+
+    def run(self, stop: Callable[[], bool | None] | None = None) -> EpisodeResult:
+        """Step to the end of the episode; ``stop`` is called after every step that did
+        not end it, and a true result ends it as ``interrupted`` (it may also raise, as
+        :meth:`~koolio_pymunk.store.interrupts.SafeInterrupt.check` does)."""
+        step = self.step
+        while step() is None:
+            if stop is not None and stop():
+                self.outcome = INTERRUPTED
+                break
+        return self.result()
+
+    def result(self, outcome: str | None = None, episode: int | None = None) -> EpisodeResult:
+        """The current episode's row: its outcome (or ``outcome``, e.g. ``interrupted``
+        for an unfinished one) under its number (or ``episode``)."""
+        env = self.env
+        return EpisodeResult(
+            self.episode if episode is None else episode,
+            env.episode_reward,
+            env.steps,
+            env.bumps,
+            outcome if outcome is not None else str(self.outcome),
+            env.has_been_rescued,
+            self.agent.epsilon,
+            env.goal_name,
+            realism_values(env),
+        )

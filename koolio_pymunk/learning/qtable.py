@@ -1,0 +1,695 @@
+"""The Q-table: Table 12 keywords, a sparse table, and its files (paper §5.4.8).
+
+**Keyword.** Each state field (goal cameras, end-of-world cameras, sonar groups) takes
+``ceil(log2(levels))`` bits, most significant first, and the action the low 3 bits. With
+the paper's sensors this is exactly Table 12 (27 bits)::
+
+    GoalCam0<<25 | GoalCam1<<23 | GoalCam2<<21 | EoWCam0<<19 | EoWCam1<<17 | EoWCam2<<15 |
+    Sonar0<<13 | Sonar1-2<<11 | Sonar3<<9 | Sonar4<<7 | Sonar5-6<<5 | Sonar7<<3 | Action
+
+The table stores one row of ``n_actions`` values per visited state: the state key is the
+keyword without its action bits (``keyword >> 3``).
+
+**File format** (``.qtable``, little-endian, version 1)::
+
+    b"KOOLIOQT"                      8 bytes magic
+    uint32 header_length             then that many bytes of UTF-8 JSON (sorted keys):
+                                     format, layout {fields, action_bits, n_actions},
+                                     sensors (the sensor configuration), episodes, q_init,
+                                     arena {name, sha256} (where it was learned),
+                                     goal, world (only when not the defaults), ...
+    uint64 n_rows
+    uint64 state_key[n_rows]         ascending
+    float64 q[n_rows][n_actions]
+    bytes   section[...]             only when the header lists ``sections``
+    uint32 crc32                     of every byte before it
+
+Reading checks everything, checksum first and then every header field and row (a file
+with a valid checksum but ``episodes: -5`` or a key beyond its layout is refused with a
+one-line :class:`~koolio_pymunk.store.errors.QTableError` naming the item).
+
+**What a table records of its run** (:func:`check_record`). ``goal`` is recorded only when
+the run's goal is not the arena's active goal (``random``, or another door), ``world`` only
+when the run was not in the ideal world (a profile name such as ``koolio-real``, or a world
+file's name): an absent key means the default, so a default run writes the bytes of a
+table made before these keys existed. A run that would continue a table trained for
+another goal or in another world is refused (:func:`check_record`); ``eval`` names both.
+
+A table learned with an algorithm other than one-step Q records it in the header
+(``algorithm``: its name and parameters) and may carry data sections after the values,
+listed in the header as ``sections: [[name, length], ...]`` (e.g. the Dyna-Q model,
+:mod:`koolio_pymunk.learning.dyna`), covered by the CRC like the rest. A one-step Q table has
+neither key, so its bytes are those of a table written before they existed.
+
+The paper keeps a table file and a backup file, both created empty when missing, read at
+start and written at the end of every episode. :class:`QTableStore` writes each one
+atomically (temporary file, flush, fsync, rename) and keeps the previous good table in
+the backup, so a crash at any moment leaves a loadable table. A torn table (checksum
+mismatch) falls back to the backup with a warning; an unreadable one (permissions, I/O
+error) is refused, since its backup is one episode behind and resuming from it would
+repeat episode numbers for ever. The store holds the table's lock
+(:mod:`koolio_pymunk.store.locks`) from :meth:`QTableStore.open` to :meth:`QTableStore.close`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import struct
+import sys
+import zlib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..robot_runtime import MAX_Q, is_number, nonfinite_item
+from ..store.config import Config, MemoryConfig, load_config, profile_names, state_fields
+from ..store.errors import FileError, KoolioError, QTableError, located
+from ..store.files import atomic_write, read_bytes, remove_stale_temps
+from ..store.keyword import MAX_ACTIONS, MAX_KEYWORD_BITS, MAX_LEVELS, KeywordLayout
+from ..store.locks import FileLock
+from .dyna_model import SECTION, Model
+
+MAGIC = b"KOOLIOQT"
+FORMAT_VERSION = 1
+#: Largest table file read (the paper's whole dense table would be 114 MiB).
+MAX_TABLE_BYTES = 1 << 30
+
+
+@dataclass
+class QTable:
+    """A sparse Q-table: a row of ``n_actions`` values per visited state key.
+
+    >>> t = QTable(KeywordLayout((("A", 3), ("B", 4))))
+    >>> t.row(5)[3] = 1.5
+    >>> t.get(5, 3), t.get(6, 3), len(t)
+    (1.5, 0.0, 1)
+    """
+
+    layout: KeywordLayout
+    meta: dict[str, Any] = field(default_factory=dict)
+    q_init: float = 0.0
+    rows: dict[int, list[float]] = field(default_factory=dict)
+    sections: dict[str, Any] = field(default_factory=dict)
+    """Named data saved after the values: ``bytes``, or an object ``bytes()`` accepts
+    (``__bytes__``), serialized at every save. Read back as ``bytes``."""
+
+    def __len__(self) -> int:
+        return len(self.rows)
+
+    def row(self, key: int) -> list[float]:
+        """The (mutable) row of ``key``, created at ``q_init`` when missing."""
+        r = self.rows.get(key)
+        if r is None:
+            r = [self.q_init] * self.layout.n_actions
+            self.rows[key] = r
+        return r
+
+    def peek(self, key: int) -> list[float] | None:
+        """The row of ``key`` if visited, without creating it."""
+        return self.rows.get(key)
+
+    def get(self, key: int, action: int) -> float:
+        r = self.rows.get(key)
+        return self.q_init if r is None else r[action]
+
+    @property
+    def entries(self) -> int:
+        return len(self.rows) * self.layout.n_actions
+
+    def nbytes(self) -> int:
+        """Bytes of this table in its file (keys + values)."""
+        return len(self.rows) * (8 + 8 * self.layout.n_actions)
+
+    def copy(self) -> QTable:
+        return QTable(
+            self.layout,
+            dict(self.meta),
+            self.q_init,
+            {k: list(v) for k, v in self.rows.items()},
+            {k: bytes(v) for k, v in self.sections.items()},
+        )
+
+    # -- bytes ----------------------------------------------------------------------
+    def to_bytes(self) -> bytes:
+        header = dict(self.meta)
+        header.update(format=FORMAT_VERSION, layout=self.layout.to_json(), q_init=self.q_init)
+        blobs = [(name, bytes(self.sections[name])) for name in sorted(self.sections)]
+        if blobs:
+            header["sections"] = [[name, len(blob)] for name, blob in blobs]
+        hjson = json.dumps(header, sort_keys=True, separators=(",", ":")).encode()
+        keys = np.fromiter(sorted(self.rows), dtype="<u8", count=len(self.rows))
+        values = np.array([self.rows[int(k)] for k in keys], dtype="<f8").reshape(
+            len(keys), self.layout.n_actions
+        )
+        body = b"".join(
+            [
+                MAGIC,
+                struct.pack("<I", len(hjson)),
+                hjson,
+                struct.pack("<Q", len(keys)),
+                keys.tobytes(),
+                values.tobytes(),
+                *(blob for _, blob in blobs),
+            ]
+        )
+        return body + struct.pack("<I", zlib.crc32(body))
+
+    @classmethod
+    def from_bytes(cls, data: bytes, source: str = "<bytes>") -> QTable:
+        """Parse and check a table file's bytes; :class:`QTableError` (one line) if bad."""
+
+        def bad(problem: str, item: str = "") -> QTableError:
+            return QTableError(located(source, item, problem))
+
+        if len(data) < len(MAGIC) + 4 + 8 + 4 or data[: len(MAGIC)] != MAGIC:
+            raise bad("not a koolio-pymunk Q-table file (bad magic or too short)")
+        (crc,) = struct.unpack("<I", data[-4:])
+        if zlib.crc32(data[:-4]) != crc:
+            raise bad("corrupt or truncated (checksum mismatch)")
+        pos = len(MAGIC)
+        (hlen,) = struct.unpack_from("<I", data, pos)
+        pos += 4
+        if pos + hlen + 8 > len(data) - 4:
+            raise bad("corrupt (header length beyond the end of the file)")
+        try:
+            header = json.loads(data[pos : pos + hlen], parse_constant=_no_constant)
+        except (ValueError, RecursionError) as exc:
+            raise bad(f"unreadable header ({_short(exc)})") from None
+        layout, q_init = check_header(header, source)
+        listed = header.pop("sections", [])
+        if not isinstance(listed, list) or not all(
+            isinstance(x, list) and len(x) == 2 and isinstance(x[0], str) and _count(x[1])
+            for x in listed
+        ):
+            raise bad("must be [[name, length], ...]", "header.sections")
+        pos += hlen
+        (n,) = struct.unpack_from("<Q", data, pos)
+        pos += 8
+        na = layout.n_actions
+        extra = sum(length for _, length in listed)
+        if len(data) - 4 - pos != n * 8 * (1 + na) + extra:
+            raise bad("corrupt or truncated (length does not match the row count)")
+        keys = np.frombuffer(data, dtype="<u8", count=n, offset=pos)
+        values = np.frombuffer(data, dtype="<f8", count=n * na, offset=pos + 8 * n)
+        _check_rows(keys, values, layout, source)
+        rows = {int(k): values[i * na : (i + 1) * na].tolist() for i, k in enumerate(keys)}
+        pos += n * 8 * (1 + na)
+        sections = {}
+        for name, length in listed:
+            if name in sections:
+                raise bad(f"section {name!r} listed twice", "header.sections")
+            sections[name] = data[pos : pos + length]
+            pos += length
+        if SECTION in sections:  # refused with the table, before a run writes anything
+            Model.from_bytes(sections[SECTION], source, layout)
+        return cls(layout, header, q_init, rows, sections)
+
+
+def _count(v: Any) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool) and v >= 0
+
+
+def _no_constant(name: str) -> float:
+    raise ValueError(f"{name} is not a number")
+
+
+def _short(exc: BaseException, limit: int = 80) -> str:
+    text = str(exc).replace("\n", " ") or type(exc).__name__
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _is_int(v: Any) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool)
+
+
+def check_header(header: Any, source: str) -> tuple[KeywordLayout, float]:
+    """Check every field of a table file's JSON header; pops ``format``, ``layout`` and
+    ``q_init`` (the rest is the table's ``meta``). Returns the layout and ``q_init``."""
+
+    def bad(item: str, problem: str) -> QTableError:
+        return QTableError(located(source, f"header.{item}", problem))
+
+    if not isinstance(header, dict):
+        raise QTableError(located(source, "header", "not a JSON object"))
+    if header.pop("format", None) != FORMAT_VERSION:
+        raise QTableError(
+            located(source, "", f"unsupported format version (this program reads {FORMAT_VERSION})")
+        )
+    layout = _check_layout(header.pop("layout", None), source)
+    q_init = header.pop("q_init", 0.0)
+    if not is_number(q_init) or abs(q_init) > MAX_Q:
+        raise bad("q_init", f"must be a finite number within +-{MAX_Q:g}, got {_show(q_init)}")
+    episodes = header.get("episodes", 0)
+    if not _is_int(episodes) or episodes < 0:
+        raise bad("episodes", f"must be an integer >= 0, got {_show(episodes)}")
+    sensors = header.get("sensors", {})
+    if not isinstance(sensors, dict):
+        raise bad("sensors", f"must be a mapping, got {_show(sensors)}")
+    arena = header.get("arena")
+    if arena is not None and not (
+        isinstance(arena, dict)
+        and isinstance(arena.get("name"), str)
+        and isinstance(arena.get("sha256"), str)
+    ):
+        raise bad("arena", f"must be {{name, sha256}}, got {_show(arena)}")
+    for key in RECORD_KEYS:
+        value = header.get(key)
+        if value is not None and not (isinstance(value, str) and value):
+            raise bad(key, f"must be a non-empty string, got {_show(value)}")
+    item = nonfinite_item(header)
+    if item is not None:  # 1e400 reads as infinity, which the next save writes as Infinity
+        raise bad(item, "not a finite number (the table could not be saved again)")
+    return layout, float(q_init)
+
+
+def _check_layout(data: Any, source: str) -> KeywordLayout:
+    def bad(item: str, problem: str) -> QTableError:
+        return QTableError(located(source, f"header.layout{item}", problem))
+
+    if not isinstance(data, dict):
+        raise bad("", f"must be a mapping, got {_show(data)}")
+    fields = data.get("fields")
+    if not isinstance(fields, list) or not fields:
+        raise bad(".fields", "must be a non-empty list of [name, levels]")
+    out = []
+    for i, f in enumerate(fields):
+        ok = isinstance(f, list) and len(f) == 2 and isinstance(f[0], str) and _is_int(f[1])
+        if not ok or not 1 <= f[1] <= MAX_LEVELS:
+            raise bad(f".fields[{i}]", f"must be [name, levels 1..{MAX_LEVELS}], got {_show(f)}")
+        out.append((f[0], f[1]))
+    na = data.get("n_actions")
+    if not _is_int(na) or not 1 <= na <= MAX_ACTIONS:
+        raise bad(".n_actions", f"must be an integer 1..{MAX_ACTIONS}, got {_show(na)}")
+    layout = KeywordLayout(tuple(out), na)
+    if "action_bits" in data and data["action_bits"] != layout.action_bits:
+        raise bad(".action_bits", f"{_show(data['action_bits'])}, expected {layout.action_bits}")
+    if layout.total_bits > MAX_KEYWORD_BITS:
+        raise bad("", f"a {layout.total_bits}-bit keyword does not fit {MAX_KEYWORD_BITS} bits")
+    return layout
+
+
+def _check_rows(keys: np.ndarray, values: np.ndarray, layout: KeywordLayout, source: str) -> None:
+    """State keys ascending and within the layout's bits; every Q value finite."""
+    if len(keys) == 0:
+        return
+    if len(keys) > 1 and not bool(np.all(keys[1:] > keys[:-1])):
+        raise QTableError(located(source, "rows", "state keys not in ascending order"))
+    state_bits = layout.total_bits - layout.action_bits
+    if state_bits < 64 and int(keys[-1]) >> state_bits:
+        raise QTableError(
+            located(source, "rows", f"state key {int(keys[-1])} beyond the {state_bits}-bit layout")
+        )
+    _check_codes(keys, layout, source)
+    if not bool(np.all(np.isfinite(values))):
+        raise QTableError(located(source, "rows", "a Q value is not a finite number"))
+    if len(values) and float(np.max(np.abs(values))) > MAX_Q:
+        raise QTableError(
+            located(source, "rows", f"a Q value is beyond +-{MAX_Q:g} (an update would overflow)")
+        )
+
+
+def _check_codes(keys: np.ndarray, layout: KeywordLayout, source: str) -> None:
+    """Every field's code of every state key below its levels (as the robot runtime's
+    :func:`~koolio_pymunk.robot_runtime.state_problem` checks one key)."""
+    for (name, levels), bits, shift in zip(layout.fields, layout.bits, layout.shifts):
+        codes = (keys >> np.uint64(shift - layout.action_bits)) & np.uint64((1 << bits) - 1)
+        over = np.flatnonzero(codes >= np.uint64(levels))
+        if len(over):
+            key = int(keys[over[0]])
+            raise QTableError(
+                located(
+                    source,
+                    "rows",
+                    f"state key {key}: code {int(codes[over[0]])} of {name} beyond its "
+                    f"{levels} levels",
+                )
+            )
+
+
+def _show(value: Any, limit: int = 40) -> str:
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def backup_path(path: Path) -> Path:
+    return path.with_name(path.name + ".bak")
+
+
+class QTableStore:
+    """A Q-table file and its backup (``<file>.bak``), as the paper keeps them.
+
+    :meth:`open` locks the table (one writer at a time), reads it (creating both files
+    empty when missing); :meth:`save` writes the previous good table to the backup and
+    the new one to the file, each atomically; :meth:`close` releases the lock. ``open``
+    is :meth:`load` then, for a new table, :meth:`create`: a caller that must check
+    something before any file is written (the training log) calls them itself.
+    """
+
+    def __init__(self, path: str | Path, warn=None, purpose: str = "koolio-pm") -> None:
+        self.path = Path(path)
+        self.backup = backup_path(self.path)
+        self._warn = warn or (lambda msg: print(f"warning: {msg}", file=sys.stderr))
+        self._last: bytes | None = None
+        self._lock = FileLock(self.path, purpose)
+        self.fresh = False
+        """True when :meth:`load` found no table (a new one starts at episode 0)."""
+
+    def open(
+        self,
+        layout: KeywordLayout,
+        sensors: dict[str, Any],
+        q_init: float,
+        arena: dict[str, str] | None = None,
+        record: dict[str, str] | None = None,
+    ) -> QTable:
+        """Lock, then load the table (checking it was made for ``layout`` and ``sensors``;
+        a table learned in another ``arena`` gives a warning), or create it."""
+        table = self.load(layout, sensors, q_init, arena, record)
+        if self.fresh:
+            self.create(table)
+        return table
+
+    def lock(self) -> None:
+        """Take the table's lock (:class:`~koolio_pymunk.store.errors.InUseError` if another
+        process writes it) and remove what interrupted writes of it left behind."""
+        if self._lock.held:
+            return
+        self._lock.acquire()
+        for p in (self.path, self.backup):
+            remove_stale_temps(p, owned=True)
+
+    def load(
+        self,
+        layout: KeywordLayout,
+        sensors: dict[str, Any],
+        q_init: float,
+        arena: dict[str, str] | None = None,
+        record: dict[str, str] | None = None,
+    ) -> QTable:
+        """Lock and read the table, or make a new empty one (``fresh``) without writing.
+        ``record`` is what a new table records of its run (``goal``, ``world``: module
+        doc); an existing one made for another is refused (:func:`check_record`). On any
+        error the lock is released again."""
+        self.lock()
+        try:
+            table = self._load_existing()
+            self.fresh = table is None
+            if table is None:
+                meta: dict[str, Any] = {"sensors": sensors, "episodes": 0}
+                if arena is not None:
+                    meta["arena"] = dict(arena)
+                meta.update(record or {})
+                return QTable(layout, meta, q_init)
+            check_compatible(table, layout, sensors, str(self.path), arena, self._warn)
+            if record is not None:
+                check_record(table, record, str(self.path))
+        except BaseException:
+            self.close()
+            raise
+        return table
+
+    def peek(self, warn: bool = False) -> QTable | None:
+        """The table :meth:`load` would read (the backup when the file is torn), read
+        without the lock and without writing; None when there is none yet. A reader
+        (``eval``) or a check before the lock is taken. Warns of a fallback to the
+        backup only with ``warn``; an unusable table raises as in :meth:`load`."""
+        saved, last = self._warn, self._last
+        if not warn:
+            self._warn = lambda msg: None
+        try:
+            return self._load_existing()
+        finally:
+            self._warn, self._last = saved, last
+
+    def exists(self) -> bool:
+        """True when the table file or its backup exists (a run would resume it)."""
+        return self.path.exists() or self.backup.exists()
+
+    def create(self, table: QTable) -> None:
+        """Write a new table to the file and the backup."""
+        self.lock()
+        self._last = table.to_bytes()
+        atomic_write(self.path, self._last)
+        atomic_write(self.backup, self._last)
+        self.fresh = False
+
+    def save(self, table: QTable) -> None:
+        """Write ``table``: the previous good table goes to the backup first."""
+        self.lock()
+        data = table.to_bytes()
+        if self._last is not None and self._last != data:
+            atomic_write(self.backup, self._last)
+        atomic_write(self.path, data)
+        self._last = data
+
+    def close(self) -> None:
+        """Release the lock (the files stay as last saved)."""
+        self._lock.release()
+
+    def __enter__(self) -> QTableStore:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def _load_existing(self) -> QTable | None:
+        main_err: QTableError | None = None
+        if self.path.exists():
+            try:
+                data = _read_table(self.path)
+            except FileError as exc:  # unreadable: refused, never replaced by the backup
+                raise FileError(
+                    f"{exc} (fix it and run again; its backup is not used in its place)"
+                ) from None
+            try:
+                table = QTable.from_bytes(data, str(self.path))
+                self._last = data
+                return table
+            except QTableError as exc:
+                main_err = exc
+        if self.backup.exists():
+            try:
+                data = _read_table(self.backup)
+                table = QTable.from_bytes(data, str(self.backup))
+            except (QTableError, FileError) as exc:
+                why = str(exc)
+                if main_err is not None:
+                    raise QTableError(f"{main_err}; backup unusable too: {why}") from None
+                raise QTableError(
+                    located(str(self.path), "", f"missing, and its backup is unusable: {why}")
+                ) from None
+            why = main_err if main_err is not None else f"{self.path}: missing"
+            self._warn(f"{why}; using the backup {self.backup}")
+            self._last = data
+            return table
+        if main_err is not None:
+            raise main_err
+        return None
+
+
+def _read_table(path: Path) -> bytes:
+    """A table file's bytes (a regular file of at most :data:`MAX_TABLE_BYTES`; a FIFO
+    or a device is refused before it is opened for reading:
+    :func:`~koolio_pymunk.store.files.read_bytes`)."""
+    return read_bytes(path, MAX_TABLE_BYTES, "Q-table file")
+
+
+def load_qtable(path: str | Path) -> QTable:
+    """Read a table file (no backup fallback); QTableError when missing or bad."""
+    p = Path(path)
+    try:
+        data = _read_table(p)
+    except FileError as exc:
+        raise QTableError(str(exc)) from None
+    return QTable.from_bytes(data, str(p))
+
+
+_warned: set[tuple[str, str, str]] = set()
+
+
+def check_compatible(
+    table: QTable,
+    layout: KeywordLayout,
+    sensors: dict[str, Any],
+    source: str,
+    arena: dict[str, str] | None = None,
+    warn=None,
+) -> None:
+    """Refuse a table made for another keyword layout or sensor configuration; warn (once
+    per process) when it was learned in another arena than ``arena`` (a record of
+    :func:`koolio_pymunk.world.arena.arena_record`): it still loads, e.g. in an edited arena."""
+    if table.layout != layout:
+        raise QTableError(
+            located(
+                source,
+                "layout",
+                f"table made for {_fmt_layout(table.layout)}, this run uses "
+                f"{_fmt_layout(layout)}{_profile_hint(table)}",
+            )
+        )
+    theirs = table.meta.get("sensors", {})
+    if not isinstance(theirs, dict):
+        raise QTableError(located(source, "sensors", f"not a mapping: {_show(theirs)}"))
+    for key in sorted(set(theirs) | set(sensors), key=str):
+        if theirs.get(key) != sensors.get(key):
+            raise QTableError(
+                located(
+                    source,
+                    f"sensors.{key}",
+                    f"table made for {_recorded(theirs, key)}, "
+                    f"this run uses {_recorded(sensors, key)}{_profile_hint(table)}",
+                )
+            )
+    learned = table.meta.get("arena")
+    if arena is None or not isinstance(learned, dict) or learned == arena:
+        return
+    key = (source, json.dumps(learned, sort_keys=True), json.dumps(arena, sort_keys=True))
+    if key in _warned:
+        return
+    _warned.add(key)
+    message = (
+        f"{source}: learned in arena {learned.get('name')!r} (content "
+        f"{learned.get('sha256')}), used in arena {arena.get('name')!r} (content "
+        f"{arena.get('sha256')}); it loads (same sensors), but its policy was learned elsewhere"
+    )
+    (warn or (lambda msg: print(f"warning: {msg}", file=sys.stderr)))(message)
+
+
+#: Header keys of what a table records of its run besides the arena (module doc).
+RECORD_KEYS = ("goal", "world")
+
+
+def describe_goal(meta: dict[str, Any], default: str | None = None) -> str:
+    """The goal a table (or a run's record) was trained for, for a message; ``default``
+    is the arena's active goal, when known.
+
+    >>> describe_goal({}), describe_goal({}, "311"), describe_goal({"goal": "random"})
+    ("the arena's active goal", 'goal 311', 'a random goal per episode')
+    """
+    goal = meta.get("goal")
+    if goal is None:
+        return "the arena's active goal" if default is None else f"goal {default}"
+    return "a random goal per episode" if goal == "random" else f"goal {goal}"
+
+
+def describe_world(meta: dict[str, Any]) -> str:
+    """The world a table was trained in, for a message.
+
+    >>> describe_world({}), describe_world({"world": "koolio-real"})
+    ('the ideal world', 'world koolio-real')
+    """
+    world = meta.get("world")
+    return "the ideal world" if world is None else f"world {world}"
+
+
+def check_record(
+    table: QTable, record: dict[str, str], source: str, default_goal: str | None = None
+) -> None:
+    """Refuse to continue a table trained for another goal or in another world than the
+    run's ``record`` (``goal``, ``world``; absent: the defaults, ``default_goal`` being the
+    arena's active goal). One line, with what to do instead: the same flag as the
+    table's run, or a new table started from it.
+
+    >>> t = QTable(KeywordLayout((("A", 3),)))
+    >>> check_record(t, {}, "t.qtable")
+    >>> check_record(t, {"goal": "random"}, "t.qtable", "311")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    koolio_pymunk.store.errors.QTableError: t.qtable: goal: trained for goal 311, this run ...
+    """
+    for key, flag in (("goal", "--goal"), ("world", "--world")):
+        theirs, mine = table.meta.get(key), record.get(key)
+        if theirs == mine:
+            continue
+        if key == "goal":
+            was, now = describe_goal(table.meta, default_goal), describe_goal(record, default_goal)
+        else:
+            was, now = describe_world(table.meta), describe_world(record)
+        same = f"{flag} {theirs}" if theirs is not None else f"no {flag}"
+        raise QTableError(
+            located(
+                source,
+                key,
+                f"trained for {was}, this run asks for {now}: run with {same} to continue "
+                f"it, or give a new --qtable (with --init-qtable {source} to start from it)",
+            )
+        )
+
+
+def _profile_hint(table: QTable) -> str:
+    """`` (made with --config NAME: add it)`` when ``table``'s sensors match a shipped
+    profile's (or the default configuration's), else ``""``."""
+    theirs = table.meta.get("sensors")
+    for name in (None, *profile_names()):
+        try:
+            cfg = load_config(name)
+        except KoolioError:  # an unreadable profile: no hint from it
+            continue
+        fields = tuple(state_fields(cfg.sensors))
+        if sensor_signature(cfg) == theirs and KeywordLayout(fields) == table.layout:
+            if name is None:
+                return " (it was made with the default configuration: leave out --config)"
+            return f" (it was made with the shipped profile {name!r}: add --config {name})"
+    return ""
+
+
+def _recorded(sensors: dict[str, Any], key: str) -> str:
+    """The value of ``key`` in a sensor signature, for a message (a missing key is not
+    ``None``: that could be a value)."""
+    return _show(sensors[key], 80) if key in sensors else "none (not recorded)"
+
+
+def _fmt_layout(layout: KeywordLayout) -> str:
+    return (
+        f"{layout.total_bits}-bit keyword ["
+        + ", ".join(f"{n}:{lv}" for n, lv in layout.fields)
+        + "]"
+    )
+
+
+def human_bytes(n: float) -> str:
+    """``1.5 KiB``-style size with one decimal (binary units, as the paper).
+
+    >>> human_bytes(119439360), human_bytes(256000000000)
+    ('113.9 MiB', '238.4 GiB')
+    """
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB"):
+        if n < 1024 or unit == "TiB":
+            return f"{n:.1f} {unit}" if unit != "B" else f"{int(n)} B"
+        n /= 1024
+    raise AssertionError("unreachable")
+
+
+def sensor_signature(cfg: Config) -> dict[str, Any]:
+    """What a Q-table depends on: the sensor layout (noise settings excluded)."""
+    s = cfg.sensors
+    so, ca = s.sonar, s.camera
+    model = {"sonar_model": "cone"} if s.backend == "cone" else {}  # sub-arcs: no key
+    return (
+        model
+        | {
+            "sonar_sensors_deg": list(so.sonar_sensors_deg),
+            "sonar_arc_deg": so.sonar_arc_deg,
+            "sub_arcs": so.sub_arcs,
+            "sonar_max_range": so.max_range,
+            "sonar_groups": [list(g) for g in so.groups],
+            "sonar_thresholds": list(so.thresholds),
+            "camera_sensors_deg": list(ca.camera_sensors_deg),
+            "camera_arc_deg": ca.camera_arc_deg,
+            "max_camera_view": ca.max_camera_view,
+            "camera_thresholds": list(ca.thresholds),
+            "compass_in_state": s.compass.in_state,
+        }
+        | _memory_signature(s.memory)
+    )
+
+
+def _memory_signature(mem: MemoryConfig) -> dict[str, Any]:
+    """The memory's part of a sensor signature: nothing when it is off (the tables of
+    memoryless runs stay as they were)."""
+    if not (mem.goal_camera or mem.eow_camera or mem.previous_action):
+        return {}
+    return {"memory": dataclasses.asdict(mem)}

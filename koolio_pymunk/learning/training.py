@@ -1,0 +1,461 @@
+"""``koolio-pm train`` and ``eval``: many episodes of one robot, with the run's files.
+
+The episodes themselves run in :mod:`koolio_pymunk.learning.episodes` (the one episode
+loop, with the seeding); this module adds what a run around them needs. Evaluation
+(``eval``, and the periodic checks and best table of ``train --eval-every``) is
+:mod:`koolio_pymunk.learning.evaluation`; :func:`evaluate` is re-exported here.
+
+**Files.** :class:`RunFiles` holds a run's Q-table
+(:class:`~koolio_pymunk.learning.qtable.QTableStore`) and its per-episode CSV log
+(:mod:`koolio_pymunk.store.episode_log`): both locked against a second writer, the log
+checked before anything is written and brought in step with the table. Every finished
+episode is recorded the same way by every loop (``train``, the window, many robots): the
+table's episode count, the table saved (every ``save_every`` episodes; the paper's
+cadence, 1, by default), then the log row appended and flushed::
+
+    episode,reward,steps,bumps,outcome,rescued,epsilon,goal
+
+``outcome`` is ``goal``, ``end_of_world``, ``wrong_door``, ``truncated`` (step cap) or
+``interrupted`` (Ctrl-C / Exit: the unfinished episode was folded into the table). With
+domain randomization (``realism.randomize``) every row ends with the parameters drawn for
+its episode, one column per parameter, named ``realism.<section>.<name>`` (sorted),
+written with ``repr`` so that they round-trip exactly.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..store.episode_log import LOG_FIELDS as LOG_FIELDS  # the log's columns, re-exported
+from ..store.episode_log import LogWriter, check_log_path, log_rows
+from ..store.errors import KoolioError, located
+from ..store.interrupts import SafeInterrupt
+from ..task.env import KoolioEnv
+from ..world.arena import arena_record, load_arena
+from .algorithms import attach, make_learner
+from .episodes import (
+    EVAL_STREAM,
+    INTERRUPTED,
+    TRAIN_STREAM,
+    EpisodeResult,
+    Episodes,
+)
+from .evaluation import DEFAULT_EVAL_EPISODES, Check, EvalResult, PeriodicCheck, evaluate
+from .qtable import (
+    QTable,
+    QTableStore,
+    check_compatible,
+    check_record,
+    load_qtable,
+    sensor_signature,
+)
+
+__all__ = [
+    "EVAL_STREAM",
+    "LOG_FIELDS",
+    "TRAIN_STREAM",
+    "EpisodeResult",
+    "EvalResult",
+    "Progress",
+    "RunFiles",
+    "TrainResult",
+    "arena_goal",
+    "evaluate",
+    "run_record",
+    "train",
+    "world_label",
+]
+
+
+@dataclass
+class Progress:
+    """Running figures of a training run, printed as progress lines."""
+
+    window: int = 100
+    recent: deque = field(default_factory=lambda: deque(maxlen=100))
+    episodes: int = 0
+    goals: int = 0
+    steps: int = 0
+    started: float = field(default_factory=time.perf_counter)
+
+    def add(self, r: EpisodeResult) -> None:
+        self.episodes += 1
+        self.goals += r.outcome == "goal"
+        self.steps += r.steps
+        self.recent.append(r.outcome == "goal")
+
+    @property
+    def goal_rate(self) -> float:
+        return sum(self.recent) / len(self.recent) if self.recent else 0.0
+
+    @property
+    def steps_per_s(self) -> float:
+        return self.steps / max(1e-9, time.perf_counter() - self.started)
+
+    def line(self, episode: int, total: int, epsilon: float) -> str:
+        return (
+            f"episode {episode:>6}/{total}  goal rate (last {len(self.recent)}) "
+            f"{self.goal_rate:6.1%}  steps/s {self.steps_per_s:8.0f}  epsilon {epsilon:.3f}"
+        )
+
+
+def world_label(world: str | Path | None) -> str:
+    """How a table records the world ``--world`` named: a profile's name, a world file's
+    name without its folders (two spellings of one path agree), ``ideal`` for none.
+
+    >>> world_label(None), world_label("koolio-real"), world_label("worlds/lab.yaml")
+    ('ideal', 'koolio-real', 'lab.yaml')
+    """
+    if world is None or str(world) == "ideal":
+        return "ideal"
+    text = str(world)
+    return Path(text).name if text.endswith((".yaml", ".yml")) or "/" in text else text
+
+
+def run_record(env: KoolioEnv) -> dict[str, str]:
+    """What a table records of a run in ``env`` besides the arena
+    (:func:`~koolio_pymunk.learning.qtable.check_record`): ``goal`` when it is not the
+    arena file's active goal (``random`` or another door), ``world`` when it is not the
+    ideal one. Empty for a default run, whose table bytes therefore stay those of tables
+    written before these keys existed."""
+    out: dict[str, str] = {}
+    goal = "random" if env.random_goal else env.goal_name
+    if goal != arena_goal(env):
+        out["goal"] = goal
+    world = world_label(env.world_name)
+    if world != "ideal":
+        out["world"] = world
+    return out
+
+
+def arena_goal(env: KoolioEnv) -> str:
+    """The active goal of ``env``'s arena file (``--goal`` changes the env's)."""
+    arena = env.arena
+    try:
+        return load_arena(arena.source, env.config.robot.radius).active_goal
+    except (KoolioError, OSError):  # an arena made in memory: its own active goal
+        return arena.active_goal
+
+
+class RunFiles:
+    """A run's Q-table and log, locked, in step, and recorded the same way by every loop.
+
+    :meth:`open` locks and opens them (the log checked before any file is written, a new
+    table created only then, the log brought in step with the table). :meth:`finished`
+    records a finished episode, :meth:`folded` an unfinished one kept in the table (Exit,
+    Ctrl-C), :meth:`close` releases both. ``save_every`` > 1 saves the table every that
+    many finished episodes (and always on :meth:`save`); ``before_save`` runs before each
+    save (many robots copy their compiled table into the Q-table there).
+    """
+
+    def __init__(
+        self,
+        store: QTableStore,
+        table: QTable,
+        log: LogWriter,
+        save_every: int = 1,
+        before_save: Callable[[], None] | None = None,
+        save_seconds: float | None = None,
+    ) -> None:
+        self.store = store
+        self.table = table
+        self.log = log
+        self.save_every = max(1, save_every)
+        self.save_seconds = save_seconds
+        """Also save when this many seconds passed since the last save (None: never by
+        time)."""
+        self.before_save = before_save
+        self._saved_at = time.monotonic()
+        self.first = int(table.meta.get("episodes", 0))
+        """Episodes the table held when the run opened it."""
+        self.unsaved = 0
+        """Finished episodes recorded since the last save."""
+
+    @classmethod
+    def open(
+        cls,
+        env: KoolioEnv,
+        store: QTableStore,
+        log_path: str | Path | None,
+        purpose: str = "koolio-pm",
+    ) -> RunFiles:
+        """Lock and open ``store``'s table and the log at ``log_path`` for a run in
+        ``env`` (``None`` or ``""``: no log). The caller closes them (:meth:`close`).
+
+        Everything that can be checked by reading is checked before the lock is taken
+        (:meth:`check`), so a refused run leaves no file behind, not even a lock file.
+        """
+        cfg = env.config
+        record = run_record(env)
+        try:
+            cls.check(env, store, log_path, record)
+            table = store.load(
+                env.layout,
+                sensor_signature(cfg),
+                cfg.learner.q_init,
+                arena_record(env.arena),
+                record,
+            )
+            attach(table, cfg.learner, str(store.path))  # the run's learning algorithm
+            log = LogWriter(
+                log_path,
+                int(table.meta.get("episodes", 0)),
+                store.fresh,
+                store.path,
+                purpose,
+                extra_fields=tuple(env.randomizer.columns),
+            )
+            try:
+                if store.fresh:
+                    store.create(table)
+            except BaseException:
+                log.close()
+                raise
+        except BaseException:
+            store.close()
+            raise
+        return cls(store, table, log)
+
+    @staticmethod
+    def check(
+        env: KoolioEnv,
+        store: QTableStore,
+        log_path: str | Path | None,
+        record: dict[str, str] | None = None,
+    ) -> QTable | None:
+        """The checks of :meth:`open` that need no lock, by reading only: the log's path
+        and header, the table (the backup when torn) made for this run's sensors, goal,
+        world (``record``: :func:`run_record`, computed when None) and learning algorithm,
+        a new table's log without rows of another run. Returns the table a run would
+        resume (None: a new one)."""
+        logged = log_path is not None and str(log_path) != ""
+        if logged:
+            check_log_path(log_path, store.path, tuple(env.randomizer.columns))
+        table = store.peek()
+        if table is None:
+            rows = log_rows(log_path) if logged else []
+            if rows:
+                raise KoolioError(
+                    located(
+                        str(log_path),
+                        "",
+                        f"holds {len(rows)} rows of another run, and the Q-table "
+                        f"{store.path} is new: give a new --log (or move this one away)",
+                    )
+                )
+            return None
+        check_compatible(table, env.layout, sensor_signature(env.config), str(store.path))
+        record = run_record(env) if record is None else record
+        check_record(table, record, str(store.path), arena_goal(env))
+        attach(table, env.config.learner, str(store.path))  # the same algorithm
+        return table
+
+    def finished(self, res: EpisodeResult, save: bool = False) -> None:
+        """Record finished episode ``res``: the table's count, a save when due (or
+        ``save``: now), the row."""
+        self.table.meta["episodes"] = res.episode + 1
+        self.unsaved += 1
+        late = self.save_seconds is not None and (
+            time.monotonic() - self._saved_at >= self.save_seconds
+        )
+        if save or late or self.unsaved >= self.save_every:
+            self.save()
+        self.log.write(res)
+
+    def folded(self, res: EpisodeResult) -> None:
+        """Record unfinished episode ``res`` whose updates stay in the table (Exit): the
+        table saved (its episode count unchanged), the row logged ``interrupted``."""
+        self.save()
+        self.log.write(res)
+
+    def save(self) -> None:
+        """Write the table (and its backup) now."""
+        if self.before_save is not None:
+            self.before_save()
+        self.store.save(self.table)
+        self.unsaved = 0
+        self._saved_at = time.monotonic()
+
+    def close(self) -> None:
+        """Release the log and the table (their locks)."""
+        try:
+            self.log.close()
+        finally:
+            self.store.close()
+
+
+@dataclass
+class TrainResult:
+    """What a training run did."""
+
+    table: QTable
+    episodes_run: int
+    goals: int
+    steps: int
+    seconds: float
+    interrupted: bool
+    results: list[EpisodeResult]
+    checks: list[Check] = field(default_factory=list)
+    """The periodic checks the run made (``eval_every``)."""
+
+
+def train(
+    env: KoolioEnv,
+    store: QTableStore,
+    episodes: int,
+    seed: int,
+    log_path: str | Path | None = None,
+    discard_unfinished: bool = False,
+    report: Callable[[str], None] | None = print,
+    report_every: float = 1.0,
+    eval_every: int = 0,
+    eval_episodes: int = DEFAULT_EVAL_EPISODES,
+    save_every: int = 1,
+    save_seconds: float | None = None,
+) -> TrainResult:
+    """Train for ``episodes`` more episodes, saving the table after each one (the
+    paper's rule), or every ``save_every`` episodes and/or every ``save_seconds``
+    seconds, and always at the end.
+
+    Ctrl-C or SIGTERM (KeyboardInterrupt) is the paper's Exit: the unfinished episode's
+    updates are kept and the table saved; with ``discard_unfinished`` it is Exit Without
+    Save: nothing more is written, the table file stays as it was at its last save (after
+    the last finished episode with the default saving; with a longer cadence the log is
+    then ahead of it, as after a SIGKILL, and resuming moves those rows aside and runs
+    their episodes again, identically). Ctrl-C takes effect between steps
+    (:class:`SafeInterrupt`). The table and the log are locked while it
+    runs (:meth:`RunFiles.open`); a failed write (disk full) stops it with a
+    :class:`~koolio_pymunk.store.errors.FileError`, the files holding the last good table.
+
+    ``eval_every`` N > 0: a greedy check of ``eval_episodes`` episodes each time the
+    table's episode count reaches a multiple of N, and the best table kept
+    (:mod:`koolio_pymunk.learning.evaluation`); the training itself is the same.
+    """
+    checker = None
+    if eval_every:
+        checker = PeriodicCheck.open(env, store, log_path, eval_every, eval_episodes, seed)
+    try:
+        files = RunFiles.open(env, store, log_path, "koolio-pm train")
+    except BaseException:
+        if checker is not None:
+            checker.close()
+        raise
+    files.save_every, files.save_seconds = max(1, save_every), save_seconds
+    table, first = files.table, files.first
+    table.meta.pop("best", None)  # a kept best table trained on is no longer its check's
+    progress = Progress()
+    results: list[EpisodeResult] = []
+    checks: list[Check] = []
+    agent = make_learner(table, env.config.learner, None, str(store.path))
+    loop = Episodes(env, agent, seed, TRAIN_STREAM)
+    last_report = time.perf_counter()
+    interrupted = False
+    try:
+        with SafeInterrupt() as guard:
+            try:
+                if checker is not None:
+                    checker.resume(first, _warn)
+                    # the check of a table saved at a multiple of N whose row is missing
+                    interrupted = _check(checker, env, table, first, guard, checks, report)
+                for e in range(first, first + episodes):
+                    if guard.pending:  # between episodes: nothing unfinished
+                        interrupted = True
+                        if report:
+                            report("interrupted between episodes: nothing unfinished")
+                        break
+                    loop.begin(e)
+                    res = loop.run(stop=guard.check)
+                    files.finished(res)
+                    results.append(res)
+                    progress.add(res)
+                    now = time.perf_counter()
+                    if report and (now - last_report >= report_every or e == first + episodes - 1):
+                        report(progress.line(e + 1, first + episodes, agent.epsilon))
+                        last_report = now
+                    if checker is not None:
+                        if files.unsaved and checker.due(e + 1):
+                            files.save()  # a check row is never ahead of the table's file
+                        interrupted = _check(checker, env, table, e + 1, guard, checks, report)
+                if files.unsaved:  # the end (or a stop between episodes): always saved
+                    files.save()
+            except KeyboardInterrupt:
+                interrupted = True
+                table = _interrupted(loop, files, discard_unfinished, results, report)
+    finally:
+        try:
+            files.close()
+        finally:
+            if checker is not None:
+                checker.close()
+    return TrainResult(
+        table,
+        progress.episodes,
+        progress.goals,
+        progress.steps,
+        time.perf_counter() - progress.started,
+        interrupted,
+        results,
+        checks,
+    )
+
+
+def _warn(message: str) -> None:
+    print(f"warning: {message}", file=sys.stderr)
+
+
+def _check(
+    checker: PeriodicCheck,
+    env: KoolioEnv,
+    table: QTable,
+    episodes: int,
+    guard: SafeInterrupt,
+    checks: list[Check],
+    report: Callable[[str], None] | None,
+) -> bool:
+    """The periodic check of the table at ``episodes`` episodes, when due. A Ctrl-C
+    drops it (it runs again on resume): True, and the loop stops before its next
+    episode."""
+    if not checker.due(episodes):
+        return False
+    c = checker.check(env, table, stop=lambda: guard.pending)
+    if c is None:
+        if report:
+            report(f"interrupted: the check at episode {episodes} dropped (it runs on resume)")
+        return True
+    checks.append(c)
+    if report:
+        kept = checker.kept or {}
+        r = c.result
+        report(
+            f"check at episode {episodes}: goal rate {r.goal_rate:.1%} (greedy, "
+            f"{r.episodes} episodes), mean return {r.mean_reward:.1f}; best "
+            f"{kept.get('goal_rate', 0.0):.1%} at episode {kept.get('episode')} "
+            f"-> {checker.best.path}"
+        )
+    return False
+
+
+def _interrupted(
+    loop: Episodes,
+    files: RunFiles,
+    discard: bool,
+    results: list[EpisodeResult],
+    report: Callable[[str], None] | None,
+) -> QTable:
+    """Ctrl-C in an episode: Exit (fold it in, save, log it ``interrupted``) or Exit Without
+    Save (the file still holds the table of the last finished episode)."""
+    if discard:
+        if report:
+            report("interrupted: unfinished episode discarded (Exit Without Save)")
+        return load_qtable(files.store.path)
+    res = loop.result(INTERRUPTED, episode=files.table.meta.get("episodes", files.first))
+    files.folded(res)
+    results.append(res)
+    if report:
+        report("interrupted: unfinished episode folded into the Q-table and saved (Exit)")
+    return files.table

@@ -1,0 +1,270 @@
+"""The sonar and camera realism models, compiled: the hot-path copy of
+:func:`koolio_pymunk.sensing.realism.apply_reference`.
+
+:func:`apply_realism` does, operation for operation and with the same uniform draws,
+what the reference does (echo of every sub-arc ray, crosstalk, the four-part beam model,
+the minimum range, misread plates and missed detections), so both give the same
+readings bit for bit; ``tests/sensing/test_realism.py`` and ``tools/agreement.py`` check it.
+:func:`sense_realism` is the learner's hot path in a realistic world: the sensing kernel
+(:func:`raycast.sense_one`), the models and the read-out (:func:`readout.readout`) in
+one call, finding the other plates in view only for a camera whose misread draw fired
+(the reference finds them for every camera; only those are used).
+The parameter layout (``params``, ``flags``) is
+:class:`koolio_pymunk.sensing.realism.SensorRealism`'s.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from .encoding_kernel import readout
+from .ray_kernel import _camera, sense_one
+from .realism import (
+    F_BEAM,
+    F_CAMERA,
+    F_CROSSTALK,
+    F_DETECT,
+    F_INCIDENCE,
+    F_MISREAD,
+    F_RANGE,
+    F_SONAR,
+    P_COS_LIMIT,
+    P_CROSSTALK,
+    P_DETECT_FAR,
+    P_DETECT_NEAR,
+    P_FAR,
+    P_LAMBDA,
+    P_LENGTH,
+    P_MIN_RANGE,
+    P_MISREAD,
+    P_RADIUS,
+    P_RANGE,
+    P_SIGMA,
+    P_VIEW,
+    P_Z_HIT,
+    P_Z_MAX,
+    P_Z_SHORT,
+)
+
+
+@numba.njit(cache=True)
+def _gaussian(u1: float, u2: float) -> float:
+    return math.sqrt(-2.0 * math.log(1.0 - u1)) * math.cos(2.0 * math.pi * u2)
+
+
+@numba.njit(cache=True)
+def _beam(z: float, u0: float, u1: float, u2: float, p: np.ndarray) -> float:
+    far = p[P_FAR]
+    top_range = p[P_RANGE]
+    c_hit = p[P_Z_HIT]
+    c_short = c_hit + p[P_Z_SHORT]
+    c_max = c_short + p[P_Z_MAX]
+    if u0 < c_hit:
+        if z < far:
+            z = z + p[P_SIGMA] * _gaussian(u1, u2)
+            if z >= top_range:
+                z = far
+        return z
+    if u0 < c_short:
+        top = z if z < far else top_range
+        lam = p[P_LAMBDA]
+        return -math.log(1.0 - u1 * (1.0 - math.exp(-lam * top))) / lam
+    if u0 < c_max:
+        return far
+    return u1 * top_range
+
+
+@numba.njit(cache=True)
+def _detect(d: float, p: np.ndarray) -> float:
+    near = p[P_DETECT_NEAR]
+    return near + (p[P_DETECT_FAR] - near) * min(d / p[P_VIEW], 1.0)
+
+
+@numba.njit(cache=True)
+def _sonar(
+    raw: np.ndarray,
+    rays: np.ndarray,
+    ray_cos: np.ndarray,
+    draws: np.ndarray,
+    p: np.ndarray,
+    f: np.ndarray,
+    neighbours: np.ndarray,
+    echo: np.ndarray,
+    crossed: np.ndarray,
+) -> None:
+    n, n_sub = rays.shape
+    far = p[P_FAR]
+    radius = p[P_RADIUS]
+    reach = p[P_LENGTH] - 1e-9
+    z = np.empty(n)
+    for s in range(n):
+        best = np.inf
+        for i in range(n_sub):
+            d = rays[s, i]
+            e = d <= reach
+            if e and f[F_RANGE]:
+                e = (d - radius) < p[P_RANGE]
+            if e and f[F_INCIDENCE]:
+                e = ray_cos[s, i] >= p[P_COS_LIMIT]
+            echo[s, i] = e
+            if e and d < best:
+                best = d
+        z[s] = far if best == np.inf else best - radius
+        crossed[s] = False
+    if not f[F_SONAR]:
+        return
+    if f[F_CROSSTALK]:
+        chance = p[P_CROSSTALK]
+        before = z.copy()
+        for s in range(n):
+            u = draws[4 * s + 3]
+            if u < chance:
+                nb = neighbours[s, 0] if u < chance * 0.5 else neighbours[s, 1]
+                if before[nb] < z[s]:
+                    z[s] = before[nb]
+                    crossed[s] = True
+    for s in range(n):
+        v = z[s]
+        if f[F_BEAM]:
+            v = _beam(v, draws[4 * s], draws[4 * s + 1], draws[4 * s + 2], p)
+        if p[P_MIN_RANGE] > 0.0 and v < p[P_MIN_RANGE]:
+            v = p[P_MIN_RANGE]
+        raw[s] = v
+
+
+@numba.njit(cache=True)
+def _cameras(
+    raw: np.ndarray,
+    n: int,
+    decoy: np.ndarray,
+    draws: np.ndarray,
+    p: np.ndarray,
+    f: np.ndarray,
+    missed: np.ndarray,
+    misread: np.ndarray,
+) -> None:
+    m = decoy.shape[0]
+    far = p[P_FAR]
+    for c in range(m):
+        missed[c, 0] = False
+        missed[c, 1] = False
+        misread[c] = False
+        if not f[F_CAMERA]:
+            continue
+        k = 4 * n + 3 * c
+        goal = raw[n + c]
+        if f[F_MISREAD] and decoy[c] < far and draws[k] < p[P_MISREAD]:
+            goal = decoy[c]
+            misread[c] = True
+        eow = raw[n + m + c]
+        if f[F_DETECT]:
+            if goal < far and draws[k + 1] >= _detect(goal, p):
+                goal = far
+                missed[c, 0] = True
+                misread[c] = False
+            if eow < far and draws[k + 2] >= _detect(eow, p):
+                eow = far
+                missed[c, 1] = True
+        raw[n + c] = goal
+        raw[n + m + c] = eow
+
+
+@numba.njit(cache=True)
+def apply_realism(
+    raw: np.ndarray,
+    rays: np.ndarray,
+    ray_cos: np.ndarray,
+    decoy: np.ndarray,
+    draws: np.ndarray,
+    params: np.ndarray,
+    flags: np.ndarray,
+    neighbours: np.ndarray,
+    echo: np.ndarray,
+    crossed: np.ndarray,
+    missed: np.ndarray,
+    misread: np.ndarray,
+) -> None:
+    """The sonar and camera models on the noise-free reading ``raw`` (in place).
+
+    Writes every sub-arc ray's ``echo``, the sonars that took a neighbour's echo
+    (``crossed``), the cameras' missed detections (``missed[c] = [goal, marker]``) and
+    misread plates; the sonar entries of ``raw`` are only rewritten when a sonar model
+    is on, the camera entries when a camera model is on (see the reference).
+    """
+    n = rays.shape[0]
+    _sonar(raw, rays, ray_cos, draws, params, flags, neighbours, echo, crossed)
+    _cameras(raw, n, decoy, draws, params, flags, missed, misread)
+
+
+@numba.njit(cache=True)
+def sense_realism(
+    x: float,
+    y: float,
+    h: float,
+    ray_offsets: np.ndarray,
+    params: np.ndarray,
+    camera_dirs: np.ndarray,
+    goal: np.ndarray,
+    markers: np.ndarray,
+    walls: np.ndarray,
+    raw: np.ndarray,
+    rays: np.ndarray,
+    eow_k: np.ndarray,
+    trig: np.ndarray,
+    ray_cos: np.ndarray,
+    decoy: np.ndarray,
+    plates: np.ndarray,
+    noise: np.ndarray,
+    u: np.ndarray,
+    noise_from_u: bool,
+    rparams: np.ndarray,
+    rflags: np.ndarray,
+    neighbours: np.ndarray,
+    echo: np.ndarray,
+    crossed: np.ndarray,
+    missed: np.ndarray,
+    misread: np.ndarray,
+    fracs: np.ndarray,
+    n_sonar: int,
+    limits: np.ndarray,
+    sonar_thresholds: np.ndarray,
+    camera_thresholds: np.ndarray,
+    group_members: np.ndarray,
+    group_sizes: np.ndarray,
+    bits: np.ndarray,
+    compass_in_state: bool,
+    out: np.ndarray,
+    codes: np.ndarray,
+) -> tuple[int, bool, bool]:
+    """One reading in a realistic world: ``(state_key, bump, goal_close)``.
+
+    :func:`raycast.sense_one` (without other plates), then, per camera whose misread
+    draw ``u[4 n + 3 c] < misread``, the nearest of ``plates`` in its arc and in sight
+    (``decoy``; far for the others), :func:`apply_realism` with the uniforms ``u``, and
+    :func:`readout.readout` with the noise draws ``noise``. With ``noise_from_u`` (the
+    uniform noise model) ``u`` holds both, from one generator call: first the readings'
+    uniforms, turned into ``noise`` as ``rng.uniform(-1, 1)`` turns them (``-1 + 2 u``),
+    then the realism uniforms."""
+    m = raw.shape[0]
+    if noise_from_u:
+        for i in range(m):
+            noise[i] = -1.0 + 2.0 * u[i]
+        u = u[m:]
+    no_plates = plates[:0]
+    sense_one(x, y, h, ray_offsets, params, camera_dirs, goal, markers, walls, raw, rays,
+              eow_k, trig, no_plates, ray_cos, decoy)  # fmt: skip
+    far = params[2]
+    for c in range(camera_dirs.shape[0]):
+        decoy[c] = far
+        if rflags[F_MISREAD] and u[4 * n_sonar + 3 * c] < rparams[P_MISREAD]:
+            direction = h + camera_dirs[c]
+            decoy[c] = _camera(x, y, direction, plates, params[3], params[1], far, walls)[0]
+    apply_realism(raw, rays, ray_cos, decoy, u, rparams, rflags, neighbours, echo, crossed,
+                  missed, misread)  # fmt: skip
+    # fmt: off
+    return readout(raw, noise, fracs, n_sonar, limits, sonar_thresholds, camera_thresholds,
+                   group_members, group_sizes, bits, compass_in_state, out, eow_k, codes)
+    # fmt: on

@@ -1,0 +1,494 @@
+"""The per-episode training log: one CSV row per episode, kept in step with its Q-table.
+
+``koolio-pm train`` and ``koolio-pm view`` append one row per finished (or interrupted)
+episode to the log (``--log``, default ``runs/<arena>.csv``)::
+
+    episode,reward,steps,bumps,outcome,rescued,epsilon,goal
+
+``outcome`` is ``goal``, ``end_of_world``, ``wrong_door`` (a Stop before a misread
+plate, in a realistic world), ``truncated`` (step cap) or ``interrupted`` (Ctrl-C / Exit:
+the unfinished episode was folded into the table; its number is run again when training
+resumes). With domain randomization the draw of each episode follows in extra columns
+named ``realism.<section>.<name>`` (:mod:`koolio_pymunk.sensing.realism`).
+
+**Which files may be a log.** A log that exists must start with that header line (and a
+run appending to it must write the same extra columns): any other file (an arena, a
+Q-table, a binary file) is refused with a one-line error and left untouched, and the log
+must not be the Q-table, its backup or a lock file. While a run writes a log it holds
+the log's lock (:mod:`koolio_pymunk.store.locks`).
+
+**Agreement with the table.** The table is saved before an episode's row is written, so
+the log and the table can disagree after a stop:
+
+* a row is missing when the process was killed between the two writes (at most one row,
+  or the rows of one save with ``--robots N``); resuming warns and goes on;
+* rows are ahead when the table holds fewer episodes than the log: ``--robots N`` saves
+  every N episodes, and a torn table falls back to its backup. Those episodes' learning
+  is not in the table and their numbers will be run again, so resuming **moves** those
+  rows (and the interrupted rows after them) out of the log into ``<log>.removed`` (a log
+  too, so nothing is lost), with a warning, before appending: episode numbers never
+  repeat (except after an ``interrupted`` row, by design);
+* a new table (no table file, no backup) with a log that already holds rows is refused:
+  that log belongs to another run.
+
+A torn last row (no line end) is moved the same way, whatever it holds.
+
+**What a row may hold.** Every line of at most :data:`MAX_LOG_LINE` characters (longer
+ones are refused before the CSV reader sees them), the header's number of columns,
+``episode``, ``steps`` and ``bumps`` integers >= 0 in ASCII digits, ``reward``,
+``epsilon`` and the ``realism.*`` draws finite decimal numbers in ASCII (:func:`ascii_int`,
+:func:`ascii_float`: Python's ``int`` and ``float`` would take ``²``, ``١٢``, ``1_0``,
+`` 7`` or ``nan``), ``rescued`` 0 or 1. A complete row that breaks a rule is refused with
+one line naming it; a torn last row is moved to ``<log>.removed``; readers
+(:func:`log_rows`, ``koolio-pm plot``) leave a torn last row out (it may be a row being
+written).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import io
+import math
+import os
+import re
+import stat
+import sys
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from .errors import FileError, KoolioError, located
+from .files import (
+    atomic_write,
+    check_path,
+    check_regular,
+    file_error,
+    make_parent,
+    not_regular,
+    read_text,
+)
+from .locks import FileLock, check_lock_file, lock_path
+
+LOG_FIELDS = ("episode", "reward", "steps", "bumps", "outcome", "rescued", "epsilon", "goal")
+HEADER = ",".join(LOG_FIELDS)
+#: Largest log read back (a million episodes is about 40 MiB).
+MAX_LOG_BYTES = 1 << 30
+#: Longest line of a log, characters (a row is under 200 plus 30 per ``realism.*``
+#: column, a goal name at most 200; the CSV reader's own limit is 128 KiB per field).
+MAX_LOG_LINE = 64 * 1024
+#: Columns holding integers >= 0, and finite numbers (plus every ``realism.*`` column).
+INT_FIELDS = ("episode", "steps", "bumps")
+FLOAT_FIELDS = ("reward", "epsilon")
+
+_INT = re.compile(r"[0-9]{1,18}")
+_FLOAT = re.compile(
+    r"[-+]?(?:[0-9]{1,400}(?:\.[0-9]{0,400})?|\.[0-9]{1,400})(?:[eE][-+]?[0-9]{1,4})?"
+)
+
+
+def ascii_int(text: str) -> int | None:
+    """An integer >= 0 in ASCII digits (at most 18: below 2**63), else None.
+
+    >>> ascii_int("42"), ascii_int("²"), ascii_int("1_0"), ascii_int(" 7"), ascii_int("-1")
+    (42, None, None, None, None)
+    """
+    return int(text) if _INT.fullmatch(text) else None
+
+
+def ascii_float(text: str) -> float | None:
+    """A finite decimal number in ASCII (``-5``, ``0.15``, ``1e-05``), else None.
+
+    >>> ascii_float("-1.5e+06"), ascii_float("nan"), ascii_float("١"), ascii_float("1e999")
+    (-1500000.0, None, None, None)
+    """
+    if not _FLOAT.fullmatch(text):
+        return None
+    value = float(text)
+    return value if math.isfinite(value) else None
+
+
+def split_log(text: str) -> tuple[list[str], bool]:
+    """The lines of a log's text without the final line end, and whether the last one is
+    torn (the text does not end with a line end): ``lines[-1]`` is then that torn row."""
+    lines = text.split("\n")
+    torn = lines[-1] != ""
+    return (lines if torn else lines[:-1]), torn
+
+
+def csv_fields(source: str, n: int, line: str) -> list[str]:
+    """The fields of line ``n`` of a log (at most :data:`MAX_LOG_LINE` characters, one
+    CSV record); one-line :class:`KoolioError` otherwise."""
+    if len(line) > MAX_LOG_LINE:
+        raise KoolioError(
+            located(
+                source,
+                f"line {n}",
+                f"{len(line):,} characters (a log line has at most "
+                f"{MAX_LOG_LINE:,}): not a log row",
+            )
+        )
+    try:
+        records = list(csv.reader([line.rstrip("\r")]))
+    except csv.Error as exc:
+        raise KoolioError(located(source, f"line {n}", f"not a CSV row ({exc})")) from None
+    return records[0] if records else []
+
+
+def check_row(source: str, n: int, row: dict[str, str]) -> None:
+    """The rules of a row (module doc) for the columns ``row`` has."""
+    for name, value in row.items():
+        if name in INT_FIELDS:
+            ok = ascii_int(value) is not None
+            want = "an integer >= 0 in digits 0-9"
+        elif name in FLOAT_FIELDS or name.startswith("realism."):
+            ok = ascii_float(value) is not None
+            want = "a finite decimal number"
+        elif name == "rescued":
+            ok = value in ("0", "1")
+            want = "0 or 1"
+        else:
+            continue
+        if not ok:
+            shown = value if len(value) <= 30 else value[:27] + "..."
+            raise KoolioError(located(source, f"line {n}", f"{name}: not {want}: {shown!r}"))
+
+
+def header_line(extra_fields: tuple[str, ...] = ()) -> str:
+    """The header of a log with ``extra_fields`` after :data:`LOG_FIELDS`.
+
+    >>> header_line(("realism.sonar.hit_sigma",)).split(",")[-2:]
+    ['goal', 'realism.sonar.hit_sigma']
+    """
+    return ",".join((*LOG_FIELDS, *extra_fields))
+
+
+def check_log_path(
+    path: str | Path,
+    table: str | Path | None = None,
+    extra_fields: tuple[str, ...] | None = None,
+) -> Path:
+    """Refuse a log path that cannot be a log (module doc), before anything is written;
+    ``extra_fields`` are the columns a writer will append (None: a reader)."""
+    p = check_path(path, "--log")
+    if p.is_dir():
+        raise FileError(located(str(p), "", "is a folder, not a file (--log needs a file name)"))
+    check_regular(p)  # a FIFO would block the writer (and a reader) for ever
+    if table is not None:
+        t = Path(table)
+        for other, what in (
+            (t, "the Q-table"),
+            (t.with_name(t.name + ".bak"), "the Q-table's backup"),
+            (lock_path(t), "the Q-table's lock file"),
+        ):
+            if _same_file(p, other):
+                raise KoolioError(
+                    located(str(p), "", f"is {what} ({other}): give the log its own file")
+                )
+    if p.name.endswith(".lock"):
+        raise KoolioError(located(str(p), "", "is a lock file: give the log its own file"))
+    check_lock_file(p)  # before the table is read: one line, not a warning and then one
+    if p.exists() and p.stat().st_size > 0:
+        text = _read(p)
+        _check_header(p, text, extra_fields)
+        if extra_fields is not None:  # a writer: every complete row, before the table is read
+            _check_rows(p, text)
+    if extra_fields is not None:
+        _check_appendable(p)
+    return p
+
+
+def _check_appendable(p: Path) -> None:
+    """A writer's log can take its first row, which comes after the first save of the
+    table (a log that cannot would leave the two out of step): an existing log opens for
+    appending, a dangling link is refused, a new log's folder can be made."""
+    if p.is_symlink() and not p.exists():
+        raise FileError(
+            located(str(p), "", f"is a link to a missing file ({os.readlink(p)}): give a real file")
+        )
+    if p.exists():
+        try:
+            os.close(os.open(p, os.O_WRONLY | os.O_APPEND | getattr(os, "O_NONBLOCK", 0)))
+        except OSError as exc:
+            raise file_error(p, "write", exc) from None
+        return
+    folder = p.absolute().parent
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    if not folder.is_dir():
+        raise FileError(
+            located(str(p), "", f"cannot create the folder {p.parent}: a file is in the way")
+        )
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise FileError(located(str(p), "", f"cannot write: permission denied ({folder})"))
+
+
+def _check_rows(p: Path, text: str) -> None:
+    """Every complete row of the log text (module doc); a torn last row is not one."""
+    lines, torn = split_log(text)
+    header = csv_fields(str(p), 1, lines[0])
+    for k, line in enumerate(lines[1:-1] if torn else lines[1:], start=2):
+        if line.strip():
+            _row(p, k, line, header)
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    """One file under two names: the same file, or (one is missing) the same place once
+    links are followed (two dangling links to one name are one file to be)."""
+    with contextlib.suppress(OSError):
+        if a.exists() and b.exists():
+            return os.path.samefile(a, b)
+    return os.path.realpath(a) == os.path.realpath(b)
+
+
+def _read(p: Path) -> str:
+    return read_text(p, MAX_LOG_BYTES, "training log")
+
+
+def _check_header(p: Path, text: str, extra_fields: tuple[str, ...] | None = None) -> None:
+    """A log's header: :data:`LOG_FIELDS`, then only ``realism.*`` columns; a writer's
+    ``extra_fields`` must be exactly the log's extra columns."""
+    first = text.split("\n", 1)[0].rstrip("\r")
+    extra = first[len(HEADER) + 1 :].split(",") if first.startswith(HEADER + ",") else []
+    if first != HEADER and (not extra or not all(c.startswith("realism.") for c in extra)):
+        shown = first if len(first) <= 40 else first[:37] + "..."
+        raise KoolioError(
+            located(
+                str(p),
+                "line 1",
+                f"not a training log (its first line is {shown!r}, a log's is {HEADER!r}); "
+                "nothing was written",
+            )
+        )
+    if extra_fields is not None and tuple(extra) != tuple(extra_fields):
+        mine = ", ".join(extra_fields) or "none"
+        raise KoolioError(
+            located(
+                str(p),
+                "line 1",
+                f"its extra columns ({', '.join(extra) or 'none'}) are not this run's "
+                f"({mine}): domain randomization differs; give another --log",
+            )
+        )
+
+
+def log_rows(path: str | Path) -> list[dict[str, str]]:
+    """The rows of a log (header and every complete row checked: module doc), as
+    mappings; ``[]`` when missing or empty. A torn last row is left out."""
+    p = Path(path)
+    if not p.exists():
+        return []
+    text = _read(p)  # a FIFO or a device is refused here, before it is opened
+    if not text:
+        return []
+    _check_header(p, text)
+    lines, torn = split_log(text)
+    header = csv_fields(str(p), 1, lines[0])
+    body = lines[1:-1] if torn else lines[1:]
+    rows = []
+    for k, line in enumerate(body, start=2):
+        if line.strip():
+            rows.append(_row(p, k, line, header))
+    return rows
+
+
+def _row(p: Path, n: int, line: str, header: list[str]) -> dict[str, str]:
+    """Line ``n`` of the log ``p`` as a checked mapping of ``header`` to its fields."""
+    fields = csv_fields(str(p), n, line)
+    if len(fields) != len(header):
+        raise KoolioError(
+            located(
+                str(p), f"line {n}", f"{len(fields)} columns, this log's rows have {len(header)}"
+            )
+        )
+    row = dict(zip(header, fields))
+    check_row(str(p), n, row)
+    return row
+
+
+class LogWriter:
+    """Appends CSV rows to the log (header once), flushing every row.
+
+    With ``episodes`` (the Q-table's episode count) the existing log is first brought in
+    step with the table (module doc); ``fresh`` says the table is new. The log's lock is
+    held until :meth:`close`.
+    """
+
+    def __init__(
+        self,
+        path: str | Path | None,
+        episodes: int | None = None,
+        fresh: bool = False,
+        table: str | Path | None = None,
+        purpose: str = "koolio-pm",
+        warn: Callable[[str], None] | None = None,
+        extra_fields: tuple[str, ...] = (),
+    ) -> None:
+        self.path = Path(path) if path is not None and str(path) != "" else None
+        self.extra_fields = tuple(extra_fields)
+        """Columns after :data:`LOG_FIELDS` (the ``realism.*`` draws)."""
+        self._fh: io.TextIOBase | None = None
+        self._warn = warn or (lambda msg: print(f"warning: {msg}", file=sys.stderr))
+        self._lock: FileLock | None = None
+        if self.path is None:
+            return
+        check_log_path(self.path, table, self.extra_fields)
+        self._lock = FileLock(self.path, purpose).acquire()
+        try:
+            if episodes is not None and self.path.exists():
+                self._reconcile(episodes, fresh, table)
+        except OSError as exc:
+            self.close()
+            raise file_error(self.path, "write", exc) from None
+        except BaseException:
+            self.close()
+            raise
+
+    # -- agreement with the table -----------------------------------------------------------
+    def _reconcile(self, episodes: int, fresh: bool, table: str | Path | None) -> None:
+        assert self.path is not None
+        p = self.path
+        text = _read(p)
+        if not text:
+            return
+        _check_header(p, text, self.extra_fields)
+        lines = text.split("\n")
+        if len(lines) == 1:  # the header without its line end
+            atomic_write(p, (lines[0] + "\n").encode("utf-8"))
+            return
+        torn = lines[-1] != ""  # the last row has no line end: a write was cut short
+        rows = [ln for ln in lines[1:-1] if ln.strip()]
+        if fresh and (rows or torn):
+            raise KoolioError(
+                located(
+                    str(p),
+                    "",
+                    f"holds {len(rows)} rows of another run, and the Q-table "
+                    f"{table or ''} is new: give a new --log (or move this one away)",
+                )
+            )
+        cut, last = _cut_line(p, lines, episodes)
+        if cut is None and not torn:
+            if rows and last < episodes - 1:
+                self._warn(
+                    f"{p}: lacks the rows of episodes {last + 1}..{episodes - 1} (the run "
+                    "stopped after saving the table and before writing them)"
+                )
+            return
+        keep = len(lines) - 1 if cut is None else cut
+        removed = lines[keep:-1] + ([lines[-1]] if torn else [])
+        numbers = _numbers(removed)
+        kept = removed_path(p)
+        _append_rows(kept, lines[0], removed)  # first: a crash between the two writes loses nothing
+        atomic_write(p, ("\n".join(lines[:keep]) + "\n").encode("utf-8"))
+        if not numbers:
+            span = "a torn row"
+        elif numbers[0] == numbers[-1]:
+            span = f"episode {numbers[0]}"
+        else:
+            span = f"episodes {numbers[0]}..{numbers[-1]}"
+        rows = "1 row" if len(removed) == 1 else f"{len(removed)} rows"
+        self._warn(
+            f"{p}: moved {rows} ({span}) to {kept}: the Q-table {table or ''} holds "
+            f"{episodes} episodes (it was saved before them); they run again"
+        )
+
+    # -- writing -------------------------------------------------------------------------
+    def _open(self) -> io.TextIOBase:
+        """The file, opened at the first row (a run that fails before its first episode
+        ends creates no log); a new or empty log gets the header first."""
+        assert self.path is not None
+        if self._fh is None:
+            make_parent(self.path)
+            self._fh = open(  # noqa: SIM115
+                self.path, "a", newline="", encoding="utf-8", opener=_open_append
+            )
+            if os.fstat(self._fh.fileno()).st_size == 0:  # new or empty: the header first
+                self._fh.write(header_line(self.extra_fields) + "\n")
+        return self._fh
+
+    def write(self, result: Any) -> None:
+        """Append ``result.row()`` (an :class:`~koolio_pymunk.learning.training.EpisodeResult`)."""
+        if self.path is None:
+            return
+        buf = io.StringIO()
+        csv.writer(buf, lineterminator="\n").writerow(result.row())
+        try:
+            fh = self._open()
+            fh.write(buf.getvalue())
+            fh.flush()
+        except OSError as exc:
+            raise file_error(self.path, "write", exc) from None
+
+    def close(self) -> None:
+        if self._fh is not None:
+            with contextlib.suppress(OSError):
+                self._fh.close()
+            self._fh = None
+        if self._lock is not None:
+            self._lock.release()
+            self._lock = None
+
+
+def _open_append(path: str, flags: int) -> int:
+    """``open()``'s opener of the log: appending, never waiting (a FIFO with no reader is
+    an error, not a hang), a regular file only."""
+    fd = os.open(path, flags | getattr(os, "O_NONBLOCK", 0), 0o666)
+    mode = os.fstat(fd).st_mode
+    if not stat.S_ISREG(mode):
+        os.close(fd)
+        raise not_regular(path, mode)
+    return fd
+
+
+def removed_path(log: Path) -> Path:
+    """Where rows taken out of ``log`` are kept: ``<log>.removed`` (a log too)."""
+    return log.with_name(log.name + ".removed")
+
+
+def _append_rows(path: Path, header: str, lines: list[str]) -> None:
+    """Append ``lines`` to the log ``path`` (created with ``header``), atomically."""
+    old = read_text(path, MAX_LOG_BYTES, "training log") if path.exists() else ""
+    if not old:
+        old = header + "\n"
+    elif not old.endswith("\n"):
+        old += "\n"
+    atomic_write(path, (old + "".join(ln + "\n" for ln in lines)).encode("utf-8"))
+
+
+def _cut_line(p: Path, lines: list[str], episodes: int) -> tuple[int | None, int]:
+    """Index of the first line to remove (the first finished row numbered ``episodes`` or
+    more), or None; and the last finished episode number kept (-1: none). Every row
+    before it is checked (module doc)."""
+    last = -1
+    header = csv_fields(str(p), 1, lines[0])
+    for k in range(1, len(lines) - 1):
+        if not lines[k].strip():
+            continue
+        row = _row(p, k + 1, lines[k], header)
+        number = int(row["episode"])
+        if row["outcome"] == "interrupted":
+            continue
+        if number >= episodes:
+            return k, last
+        if number <= last:
+            raise KoolioError(
+                located(
+                    str(p),
+                    f"line {k + 1}",
+                    f"episode numbers go back ({number} after {last}): not the log of one "
+                    "run; give another --log",
+                )
+            )
+        last = number
+    return None, last
+
+
+def _numbers(lines: list[str]) -> list[int]:
+    """Episode numbers of the rows ``lines`` (a torn or malformed row has none)."""
+    out = []
+    for ln in lines:
+        number = ascii_int(ln[:20].split(",", 1)[0])
+        if number is not None:
+            out.append(number)
+    return sorted(out)

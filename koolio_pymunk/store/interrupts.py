@@ -1,0 +1,158 @@
+"""Ctrl-C at a safe point: an interrupt never lands between two writes that belong together.
+
+Training saves the Q-table and then appends the episode's log row; the window does the
+same. :class:`SafeInterrupt` turns SIGINT into a flag that the loops check between steps,
+so the files are always in step when a run stops. Once a Ctrl-C is taken, the run
+handles it (folds the unfinished episode in, saves, logs it): further Ctrl-Cs are
+ignored until that is done, so a second one never cuts the handling short. Code that
+writes after an interrupt outside a guard (the window's last save) runs under
+:func:`deferred`.
+
+SIGTERM (``kill``, a job scheduler's stop) is taken the same way while a guard is active:
+the run stops at its next safe point, saves and exits, as on Ctrl-C.
+
+Only the first of two quick Ctrl-Cs counts: a second one interrupts at once only when the
+first has waited :data:`GRACE_SECONDS` without being taken (a step that does not end),
+never while a save and its log row are being written (milliseconds).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import threading
+import time
+from collections.abc import Iterator
+from typing import Any
+
+#: Seconds a pending Ctrl-C may wait for the loop before a second one interrupts at once.
+GRACE_SECONDS = 2.0
+
+
+def raise_once(signum: int, frame: Any) -> None:
+    """The SIGINT handler of a ``koolio-pm`` process (:func:`command_line`): the first
+    Ctrl-C raises ``KeyboardInterrupt``; from then on Ctrl-C is ignored, since that one
+    is being handled (the files put in step, one line said, exit status 130)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    raise KeyboardInterrupt
+
+
+def command_line() -> None:
+    """Make Ctrl-C :func:`raise_once` for this process (main thread only)."""
+    main = threading.current_thread() is threading.main_thread()
+    if main and signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        signal.signal(signal.SIGINT, raise_once)
+
+
+def _replaceable(handler: Any) -> bool:
+    """Python's own SIGINT handler, or :func:`raise_once` (a guard may stand in for it)."""
+    return handler is signal.default_int_handler or handler is raise_once
+
+
+class SafeInterrupt:
+    """Ctrl-C at a safe point: while active, SIGINT only sets :attr:`pending`; the loops
+    check it between steps and raise ``KeyboardInterrupt`` there, so an interrupt never
+    lands between saving the table and writing the episode's log row.
+
+    After :meth:`check` has raised (the interrupt is being handled: the unfinished episode
+    folded in and saved), every further Ctrl-C is ignored while the guard is active. A
+    second Ctrl-C before the first is taken interrupts at once only if the first has
+    waited :data:`GRACE_SECONDS` (the loop is stuck in a step); sooner, it is ignored.
+    Does nothing outside the main thread (signals go there only).
+
+    >>> with SafeInterrupt() as guard:
+    ...     guard.pending
+    False
+    """
+
+    def __init__(self) -> None:
+        self.pending = False
+        self.taken = False
+        """True once an interrupt was raised: it is being handled."""
+        self.ignored = 0
+        """Ctrl-Cs ignored (while one was pending or being handled)."""
+        self._since = 0.0
+        self._previous: Any = None
+        self._previous_term: Any = None
+        self._installed = False
+        self.signal = signal.SIGINT
+        """The signal of the interrupt taken: SIGINT (Ctrl-C) or SIGTERM."""
+
+    def _handle(self, signum: int, frame: Any) -> None:
+        if self.taken:
+            self.ignored += 1
+            return
+        if self.pending:
+            if time.monotonic() - self._since < GRACE_SECONDS:
+                self.ignored += 1
+                return
+            self.pending = False
+            self.taken = True
+            raise KeyboardInterrupt
+        self.pending = True
+        self.signal = signal.Signals(signum)
+        self._since = time.monotonic()
+
+    def check(self) -> None:
+        """Raise ``KeyboardInterrupt`` if a Ctrl-C is pending (it is then being handled:
+        further Ctrl-Cs are ignored while the guard is active)."""
+        if self.pending:
+            self.pending = False
+            self.taken = True
+            raise KeyboardInterrupt
+
+    def __enter__(self) -> SafeInterrupt:
+        if threading.current_thread() is threading.main_thread():
+            self._previous = signal.getsignal(signal.SIGINT)
+            if _replaceable(self._previous):  # only Python's own, or the command line's
+                signal.signal(signal.SIGINT, self._handle)
+                self._installed = True
+                self._previous_term = signal.getsignal(signal.SIGTERM)
+                if self._previous_term is signal.SIG_DFL:  # a stop request: the same path
+                    signal.signal(signal.SIGTERM, self._handle)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self._installed:
+            signal.signal(signal.SIGINT, self._previous)
+            if self._previous_term is signal.SIG_DFL:
+                signal.signal(signal.SIGTERM, signal.SIG_DFL)
+            self._installed = False
+
+
+@contextlib.contextmanager
+def deferred() -> Iterator[None]:
+    """Run the block without being cut by Ctrl-C (e.g. the last save and its log row
+    after an interrupt). A Ctrl-C during the block raises ``KeyboardInterrupt`` after it,
+    unless the block is already ending in an exception. Outside the main thread, or when
+    SIGINT has a handler of someone else's, the block runs as it is.
+
+    >>> with deferred():
+    ...     1 + 1
+    2
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.getsignal(signal.SIGINT)
+    if not _replaceable(previous):
+        yield
+        return
+    seen: list[int] = []
+    signal.signal(signal.SIGINT, lambda signum, frame: seen.append(signum))
+    failed = True
+    try:
+        yield
+        failed = False
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    if seen and not failed:
+        raise KeyboardInterrupt
+
+
+def ignore_from_now() -> None:
+    """Ignore Ctrl-C for the rest of the process (the command has ended and said so; a
+    Ctrl-C while Python shuts down would otherwise end it by the signal, exit status
+    -2, instead of the status the command chose). Main thread only."""
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.SIG_IGN)

@@ -1,0 +1,283 @@
+"""Locks: one writer per Q-table, log or sweep folder at a time.
+
+Two ``koolio-pm train`` runs on the same ``--qtable`` would each load the table, learn,
+and overwrite each other's saves: one run's episodes would silently vanish. So a writer
+(``train``, ``view`` while learning, ``sweep``) first takes an advisory lock on a lock
+file beside what it writes (``runs/hallway.qtable.lock``, ``runs/hallway.csv.lock``,
+``sweeps/NAME/.sweep.lock``); a second writer gets the one-line error
+``runs/hallway.qtable: in use by process 4242 (koolio-pm train) ...``. Readers (``eval``,
+``export``, ``view --greedy``, ``info``) take no lock: every write is atomic, so they
+always read a whole file.
+
+The lock is the operating system's (``flock`` on POSIX, ``msvcrt.locking`` on Windows),
+held by an open file: it goes away with the process however it ends, SIGKILL included,
+so a crash never leaves a stale lock. The lock file itself stays (deleting it would let
+two processes lock two different files of one name); it holds the holder's process id
+and command for the message above, and can be deleted whenever no process runs.
+
+**Only a plain lock file is used.** The lock file is opened without following a symbolic
+link (``O_NOFOLLOW``) and without blocking, and must be a regular file with one name
+(not a hard link of the table), holding nothing but a holder's note (``#process ...``,
+a few dozen bytes): anything else at its name (a link to the table, a FIFO, a folder,
+a file of other data) is refused with one line and left as it is, never truncated or
+written through.
+
+>>> import pathlib, tempfile
+>>> table = pathlib.Path(tempfile.mkdtemp()) / "t.qtable"
+>>> with FileLock(table, "demo"):
+...     FileLock(table, "second").acquire()  # doctest: +ELLIPSIS
+Traceback (most recent call last):
+...
+koolio_pymunk.store.errors.InUseError: ...t.qtable: in use by process ... (demo)...
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+from pathlib import Path
+
+from .errors import FileError, InUseError, located
+from .files import make_parent, os_problem, special_kind
+
+if sys.platform == "win32":  # pragma: no cover - exercised on Windows only
+    import msvcrt
+
+    def _try_lock(fd: int) -> bool:
+        os.lseek(fd, 0, os.SEEK_SET)
+        try:
+            msvcrt.locking(fd, msvcrt.LK_NBLCK, 1)
+        except OSError:
+            return False
+        return True
+
+    def _unlock(fd: int) -> None:
+        os.lseek(fd, 0, os.SEEK_SET)
+        msvcrt.locking(fd, msvcrt.LK_UNLCK, 1)
+
+else:
+    import fcntl
+
+    def _try_lock(fd: int) -> bool:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            return False
+        return True
+
+    def _unlock(fd: int) -> None:
+        fcntl.flock(fd, fcntl.LOCK_UN)
+
+
+#: The holder's note starts after this byte (Windows locks byte 0 against reading).
+_NOTE_AT = 1
+
+
+def lock_path(target: str | Path) -> Path:
+    """The lock file of ``target``: ``<target>.lock`` beside it (beside the file a symbolic
+    link points to, so that two names of one file share one lock; beside the link itself
+    when it points nowhere: no folder is made where a dangling link points)."""
+    target = Path(target)
+    with contextlib.suppress(OSError):  # unreachable: acquire() says why
+        if target.is_symlink() and target.exists():
+            target = Path(os.path.realpath(target))
+    return target.with_name(target.name + ".lock")
+
+
+#: Largest lock file taken as one (a note is ``#process <pid> (<purpose>)``).
+MAX_NOTE_BYTES = 4096
+#: Flags of the lock file's open: created if missing, never through a symbolic link,
+#: never waiting (a FIFO), not inherited by child processes.
+_LOCK_FLAGS = (
+    os.O_RDWR
+    | os.O_CREAT
+    | getattr(os, "O_NOFOLLOW", 0)
+    | getattr(os, "O_NONBLOCK", 0)
+    | getattr(os, "O_CLOEXEC", 0)
+)
+
+
+class FileLock:
+    """An exclusive advisory lock on ``target`` (module doc); also a context manager.
+
+    ``purpose`` (e.g. ``koolio-pm train``) is shown to a process that finds it held.
+    """
+
+    _fd: int | None = None
+
+    def __init__(self, target: str | Path, purpose: str = "koolio-pm", path: Path | None = None):
+        self._fd = None
+        self.target = Path(target)
+        self.path = path if path is not None else lock_path(self.target)
+        self.purpose = purpose
+
+    @property
+    def held(self) -> bool:
+        return self._fd is not None
+
+    def acquire(self) -> FileLock:
+        """Take the lock; :class:`InUseError` naming the holder when another has it, a
+        :class:`FileError` when the lock file cannot be made or is not a plain lock file."""
+        if self._fd is not None:
+            return self
+        make_parent(self.path)
+        fd = self._open()
+        try:
+            locked = _try_lock(fd)
+        except OSError:  # a file system without locks: go on unprotected
+            locked = True
+        if not locked:
+            holder = _read_note(fd)
+            os.close(fd)
+            raise InUseError(
+                located(
+                    str(self.target),
+                    "",
+                    f"in use by {holder}; wait for it to finish or stop it (lock file {self.path})",
+                )
+            )
+        try:
+            self._check_content(fd)
+        except BaseException:
+            with contextlib.suppress(OSError):
+                _unlock(fd)
+            os.close(fd)
+            raise
+        self._fd = fd
+        _write_note(fd, f"process {os.getpid()} ({self.purpose})")
+        return self
+
+    def _open(self) -> int:
+        """The lock file, opened as a plain lock file (module doc) or refused."""
+        try:
+            fd = os.open(self.path, _LOCK_FLAGS, 0o666)
+        except OSError as exc:
+            if os.path.islink(self.path):
+                raise _refuse(self.target, self.path, _LINK) from None
+            _refuse_special(self.target, self.path)  # e.g. a socket cannot be opened
+            raise FileError(
+                located(
+                    str(self.target),
+                    "",
+                    f"cannot create its lock file {self.path}: {os_problem(exc)}",
+                )
+            ) from None
+        try:
+            _check_opened(fd, self.target, self.path)
+        except BaseException:
+            os.close(fd)
+            raise
+        return fd
+
+    def _check_content(self, fd: int) -> None:
+        """Under the lock: the file holds a holder's note or nothing (it is about to be
+        truncated: nothing else may be)."""
+        _check_note(fd, self.target, self.path)
+
+    def release(self) -> None:
+        """Give the lock up (closing the file releases it too)."""
+        fd, self._fd = self._fd, None
+        if fd is None:
+            return
+        with contextlib.suppress(OSError):
+            _unlock(fd)
+        with contextlib.suppress(OSError):
+            os.close(fd)
+
+    def __enter__(self) -> FileLock:
+        return self.acquire()
+
+    def __exit__(self, *exc: object) -> None:
+        self.release()
+
+    def __del__(self) -> None:
+        self.release()
+
+
+_LINK = "is a symbolic link, not a lock file: remove it (no run is using it)"
+
+
+def _refuse(target: Path, path: Path, problem: str) -> FileError:
+    return FileError(located(str(target), "", f"its lock file {path} {problem}"))
+
+
+def _refuse_special(target: Path, path: Path) -> None:
+    """Refuse ``path`` when it is there and not a regular file (nothing if unreachable)."""
+    try:
+        kind = special_kind(os.lstat(path).st_mode)
+    except OSError:
+        return
+    if kind is not None:
+        raise _refuse(target, path, f"is {kind}, not a lock file: remove it")
+
+
+def _check_opened(fd: int, target: Path, path: Path) -> None:
+    """A lock file is a regular file of one name (not a hard link of the table)."""
+    st = os.fstat(fd)
+    kind = special_kind(st.st_mode)
+    if kind is not None:
+        raise _refuse(target, path, f"is {kind}, not a lock file: remove it")
+    if st.st_nlink > 1:
+        raise _refuse(
+            target,
+            path,
+            f"has {st.st_nlink} names (a hard link, perhaps of the table itself), "
+            "not a lock file of its own: remove that name",
+        )
+
+
+def _check_note(fd: int, target: Path, path: Path) -> None:
+    """A lock file holds a holder's note (``#...``, at most :data:`MAX_NOTE_BYTES`) or
+    nothing."""
+    size = os.fstat(fd).st_size
+    if size == 0:
+        return
+    try:
+        head = os.pread(fd, 1, 0)
+    except OSError:
+        head = b""
+    if size > MAX_NOTE_BYTES or head != b"#":
+        raise _refuse(
+            target,
+            path,
+            "holds other data than a lock note (its first byte is not '#' or it is "
+            f"over {MAX_NOTE_BYTES} bytes): move that file away",
+        )
+
+
+def check_lock_file(target: str | Path, path: Path | None = None) -> None:
+    """Refuse, before anything is read or written, a lock file of ``target`` that could
+    not be taken (module doc: a link, a special file, a hard link, other data); a
+    missing or unreachable one is left to :meth:`FileLock.acquire`."""
+    target = Path(target)
+    path = path if path is not None else lock_path(target)
+    if os.path.islink(path):
+        raise _refuse(target, path, _LINK)
+    flags = os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0)
+    try:
+        fd = os.open(path, flags)
+    except OSError:
+        _refuse_special(target, path)  # e.g. a socket cannot be opened
+        return
+    try:
+        _check_opened(fd, target, path)
+        _check_note(fd, target, path)
+    finally:
+        os.close(fd)
+
+
+def _write_note(fd: int, note: str) -> None:
+    with contextlib.suppress(OSError):  # the note is a courtesy: the lock holds without it
+        os.ftruncate(fd, 0)
+        os.lseek(fd, 0, os.SEEK_SET)
+        os.write(fd, b"#" + note.encode("utf-8", "replace") + b"\n")
+
+
+def _read_note(fd: int) -> str:
+    try:
+        os.lseek(fd, _NOTE_AT, os.SEEK_SET)
+        text = os.read(fd, 200).decode("utf-8", "replace").strip()
+    except OSError:
+        text = ""
+    return text or "another process"

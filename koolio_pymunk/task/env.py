@@ -1,0 +1,388 @@
+"""``KoolioEnv``: the paper's delivery task as a Gymnasium environment."""
+
+from __future__ import annotations
+
+import copy
+import math
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from ..sensing.memory import Memory
+from ..sensing.suite import Readings, SensorSuite
+from ..store.config import Config, apply_world, load_config, state_fields
+from ..store.errors import ConfigError
+from ..store.keyword import KeywordLayout
+from ..store.realism_config import Randomizer, RealismConfig, motion_on
+from ..world.arena import Arena, Point, load_arena
+from ..world.motion_errors import MotionErrors
+from ..world.physics import ACTION_NAMES, Action, World
+from .end_zones import EndZones
+from .rescue import rescue_robot, wants_rescue
+from .rules import TERMS, Judgement, judge
+
+#: The event of a Stop in front of a misread plate (realism ``camera.misread``): the robot
+#: believes it delivered (the goal reward, the episode ends) at another door.
+WRONG_DOOR = "wrong_door"
+
+NO_KEYWORD = -1
+"""``info["keyword"]`` after ``reset``: no action taken yet (keywords are >= 0)."""
+RESET_EVENT = "reset"
+"""``info["event"]`` after ``reset``: no reward rule judged yet."""
+
+
+class KoolioEnv(gym.Env):
+    """Koolio, a round delivery robot, must stop in front of an office door's number plate.
+
+    **Arena.** A YAML arena (``arenas/hallway.yaml`` by default: the paper's 1632 x 88 in
+    hallway): walls, optional obstacles, named goals (one active), end-of-world markers
+    with zones, a start point. Units are inches.
+
+    **Action space** ``Discrete(5)``: 0 Stop, 1 RotateLeft (+``rotate_action_arc_deg``),
+    2 RotateRight, 3 Forward, 4 Reverse (``move_action_distance``). pymunk resolves every
+    move against the walls.
+
+    **Observation space** ``MultiDiscrete``: the encoded readings in keyword order. With
+    the paper's sensors, 12 values: goal distance seen by the front, left and right cameras
+    and end-of-world distance seen by the same three (0 Close < 36 in, 1 Medium < 96,
+    2 Far or not seen), then six sonar values (sonars 0, 1&2 averaged, 3, 4, 5&6
+    averaged, 7; 0 Bump < 6 in, 1 Close < 24, 2 Medium < 60, 3 Far).
+
+    **Rewards** (first that applies, values in ``Config.rewards``): goal (Stop with the
+    front camera reading the goal Close) > end_of_world > bump (any sonar Bump) > stop /
+    reverse / turn / forward by action. ``info["reward_terms"]`` names them.
+
+    **Episode end.** ``terminated`` at the goal or in an end-of-world zone; ``truncated``
+    after ``episode.max_steps`` steps (1500 by default; 0: no cap). With the misread-plate
+    model on, a Stop whose front camera reads another door's plate as the goal Close gets
+    the goal reward and ends the episode as the robot would, but its event is
+    ``wrong_door``, not ``goal``. Each episode starts at the arena's start point with a
+    uniformly random heading unless the arena fixes it (exploring starts).
+
+    **Step cap and** ``TimeLimit``. The cap belongs to the simulator's configuration:
+    ``koolio-pm train``, ``eval`` and ``view`` drive the class directly, without
+    wrappers, and their logs record the truncations. The registered
+    ``koolio_pymunk/Hallway-v0`` also declares it, as Gymnasium does, with
+    ``max_episode_steps=1500``: ``gym.make`` wraps the env in ``TimeLimit`` and
+    ``env.spec.max_episode_steps`` is 1500. Both caps then count the same steps and by
+    default end the episode on the same step, with the same ``truncated``; when they
+    differ the smaller one wins. ``gym.make(id, max_steps=N)`` lowers the env's own cap
+    only; for longer episodes raise both (``max_steps=N, max_episode_steps=N``), or pass
+    ``max_steps=0`` and let ``max_episode_steps`` alone decide.
+
+    **Rescue.** With ``rescue.auto_rescue_toggle`` on, a bumping robot past
+    ``max_steps_before_rescue`` steps is rescued with probability ``rescue_chance``
+    (random reverses, random spin) after the step's reward is found and its Q update made
+    (paper §5.4.8: the update bootstraps from the state the action led to); the
+    observation returned is the one after the rescue and the step's reward stays the Bump
+    reward. :meth:`rescue` forces one.
+
+    **info** (the same keys, each with one type, after ``reset`` and after every step, so
+    vector envs can stack them through staggered autoresets): ``pose`` (tuple of 3 floats:
+    x, y, heading radians), ``sonar`` / ``goal_cam`` / ``eow_cam`` (lists of floats: noised
+    distances, inches), ``compass`` (float), ``state_key`` (int), ``keyword`` (int: Table
+    12 keyword of the previous state and this action, the Q entry the step updates; -1
+    after ``reset``), ``event`` (str: the winning reward rule; ``"reset"`` after
+    ``reset``), ``rescued`` and ``has_been_rescued`` (bool), ``reward_terms`` (dict of the
+    seven named terms, floats; all 0.0 after ``reset``), ``steps`` and ``bumps`` (int),
+    ``goal`` (str: the active goal's name).
+
+    **Rendering.** ``render_mode`` is ``None``, ``"human"`` (a window) or ``"rgb_array"``
+    (the window's picture as an array); any other value is refused with ``ValueError``.
+    Drawing needs the ``[view]`` extra (pygame-ce); without it :meth:`render` raises
+    Gymnasium's ``DependencyNotInstalled`` naming the extra to install.
+
+    **World.** ``world`` (a profile name such as ``koolio-real``, or a file) lays the
+    realism models and sensor noise of a world over the configuration
+    (:func:`~koolio_pymunk.store.config.apply_world`); the default is the ideal world. The
+    realism models (:mod:`koolio_pymunk.sensing.realism`) act on every reading and move; with
+    ``realism.randomize`` each reset draws the episode's parameters
+    (:attr:`realism_draw`). :attr:`readings` holds what a real robot's driver would hand
+    to ``robot_runtime.py`` (``sonar``, ``goal``, ``eow``: inches from the robot's edge,
+    ``really_long_distance`` when nothing is seen) and what the models did (``echo`` per
+    sonar sub-arc ray, ``missed`` and ``misread`` per camera).
+
+    All randomness (start headings, sensor noise, realism, rescues) comes from
+    ``self.np_random``, seeded by ``reset(seed=...)``.
+    """
+
+    metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 30}
+
+    def __init__(
+        self,
+        arena: str | Path | Arena = "hallway",
+        config: Config | str | Path | None = None,
+        goal: str | None = None,
+        render_mode: str | None = None,
+        max_steps: int | None = None,
+        world: str | Path | None = None,
+    ) -> None:
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            modes = ", ".join(repr(m) for m in self.metadata["render_modes"])
+            raise ValueError(f"render_mode: {render_mode!r} is not one of None, {modes}")
+        # A configuration passed in is copied, never changed (``max_steps``, ``world``).
+        cfg = copy.deepcopy(config) if isinstance(config, Config) else load_config(config)
+        if world is not None:
+            cfg = apply_world(cfg, world)
+        self.world_name = "ideal" if world is None else str(world)
+        """The world laid over the configuration (``--world``), or ``ideal``."""
+        self.config = cfg
+        if max_steps is not None:
+            self.config.episode.max_steps = int(max_steps)
+        self.config.validate("config")
+        radius = self.config.robot.radius
+        self.arena = arena if isinstance(arena, Arena) else load_arena(arena, radius)
+        if goal is not None and goal != "random":
+            if goal not in self.arena.goal_names():
+                raise ConfigError(
+                    f"{self.arena.source}: goal: no goal named {goal!r} "
+                    f"(goals: {', '.join(self.arena.goal_names())})"
+                )
+            self.arena = self.arena.with_active_goal(goal)
+        self.random_goal = goal == "random"
+        self.world_arena = self.arena.to_world()
+        self.world = World.from_arena(self.arena, radius)
+        self.zones = EndZones(self.world_arena, radius)
+        realism = self.config.realism
+        self.realism: RealismConfig = realism
+        """The realism models of the current episode (a draw when randomized)."""
+        self.randomizer = Randomizer(realism)
+        self.realism_draw: dict[str, float] = {}
+        """The parameters domain randomization drew for this episode (empty: none)."""
+        self.motion = MotionErrors(realism.motion) if self._moves_with_errors() else None
+        self.sensors = SensorSuite(
+            self.config.sensors,
+            self.world,
+            self.world_arena.goal().at,
+            [m.at for m in self.world_arena.end_of_world],
+            realism=realism,
+            plates=self._other_plates(),
+        )
+        fields = state_fields(self.config.sensors)
+        self.layout = KeywordLayout(tuple(fields))
+        self.memory = Memory(self.config.sensors.memory, self.sensors.n_camera, self.sensors.far)
+        """What the robot remembers in its state (``sensors.memory``; off by default)."""
+        self._memory_bits = self.layout.bits[len(self.sensors.levels) :]
+        self.action_space = spaces.Discrete(len(ACTION_NAMES))
+        self.observation_space = spaces.MultiDiscrete([lv for _, lv in fields])
+        self.render_mode = render_mode
+        self._renderer: Any = None
+        self.turn_arc = math.radians(self.config.actions.rotate_action_arc_deg)
+        """RotateLeft / RotateRight turn by this many radians (``rotate_action_arc_deg``)."""
+        self.move_distance = self.config.actions.move_action_distance
+        """Forward / Reverse move this many inches (``move_action_distance``)."""
+        self.goal_name = self.world_arena.active_goal
+        self._reset_counters()
+
+    # -- Gymnasium API ---------------------------------------------------------------
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Start an episode; ``options`` may hold ``goal`` (a goal name) or ``heading``."""
+        super().reset(seed=seed)
+        self.reset_key(options)
+        return self._obs(), self._info()
+
+    def step(self, action: int) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        _, reward, terminated, truncated = self.transition(int(action))
+        return self._obs(), reward, terminated, truncated, self._info()
+
+    def render(self) -> np.ndarray | None:
+        if self.render_mode is None:
+            gym.logger.warn("render() called without a render_mode")
+            return None
+        if self._renderer is None:
+            from ..store.extras import view_extra
+
+            with view_extra("render"):
+                from .render import EnvRenderer  # pygame only when drawing
+
+            self._renderer = EnvRenderer(self)
+        return self._renderer.render(self.render_mode)
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+    # -- fast path (used by the learner; no observation array, no info dict) ----------
+    def reset_key(self, options: dict[str, Any] | None = None) -> int:
+        """Reset without building obs/info; returns the state key. Call ``reset`` first
+        once (or seed ``np_random``) to own a seeded generator."""
+        options = options or {}
+        rng = self.np_random
+        if self.randomizer:
+            self.realism, self.realism_draw = self.randomizer.draw(rng)
+            self.sensors.set_realism(self.realism)
+            if self.motion is not None:
+                self.motion.configure(self.realism.motion)
+        goal = options.get("goal")
+        if goal is None and self.random_goal:
+            names = self.world_arena.goal_names()
+            goal = names[int(rng.integers(len(names)))]
+        if goal is not None:
+            self.set_goal(goal)
+        start = self.world_arena.start
+        heading = options.get("heading")
+        if heading is None:
+            heading = (
+                math.radians(start.heading_deg)
+                if start.heading_deg is not None
+                else float(rng.uniform(0.0, 2.0 * math.pi))
+            )
+        self.world.place(0, start.at, float(heading))
+        self._reset_counters()
+        self.memory.reset()
+        self._sense()
+        return self.state_key
+
+    def transition(self, action: int) -> tuple[int, float, bool, bool]:
+        """One whole step: :meth:`simulate`, then :meth:`rescue_check` (the Gymnasium
+        :meth:`step` without its observation and ``info``).
+
+        Returns ``(next_key, reward, terminated, truncated)``. ``next_key`` is the state the
+        action led to, *before* any rescue: the paper applies the Q update first and then
+        checks for a rescue (§5.4.8), so the update bootstraps from ``next_key``.
+        :attr:`state_key` is the state after the rescue, where the next step starts (the
+        same as ``next_key`` when no rescue happened). A learner that must see the step
+        before the rescue (the episode loop, :mod:`koolio_pymunk.learning.episodes`) calls
+        the two halves itself, with its update between them.
+        """
+        out = self.simulate(action)
+        self.rescue_check()
+        return out
+
+    def simulate(self, action: int) -> tuple[int, float, bool, bool]:
+        """Simulate -> observe -> reward -> terminated -> truncated, without the rescue
+        check: returns ``(next_key, reward, terminated, truncated)``."""
+        prev_key = self.state_key
+        if self.motion is None:
+            self.world.act((action,), self.move_distance, self.turn_arc)
+        else:
+            self._act_with_errors(action)
+        bump, goal_close = self._sense(action)
+        x, y, _ = self._pose
+        j = judge(action, goal_close, self.zones.contains(x, y), bump, self.config.rewards)
+        if j.event == "goal" and self.sensors.goal_misread():
+            j = Judgement(WRONG_DOOR, j.reward, True, j.terms)
+        self.steps += 1
+        self.bumps += int(bump)
+        self.episode_reward += j.reward
+        self.judgement = j
+        self.last_action = action
+        self.keyword = (prev_key << self.layout.action_bits) | action
+        self.rescued = False
+        self._check_rescue = not j.terminated and bump
+        cap = self.config.episode.max_steps
+        truncated = not j.terminated and cap > 0 and self.steps >= cap
+        return self.state_key, j.reward, j.terminated, truncated
+
+    def rescue_check(self) -> bool:
+        """Auto rescue after the step's update (paper §5.4.8): with the toggle on, a robot
+        that bumped past ``max_steps_before_rescue`` steps is rescued with probability
+        ``rescue_chance``. Once per :meth:`simulate`; returns whether it rescued."""
+        due, self._check_rescue = self._check_rescue, False
+        if due and wants_rescue(self.config.rescue, self.steps, True, self.np_random):
+            self._rescue()
+            return True
+        return False
+
+    def rescue(self) -> tuple[np.ndarray, dict[str, Any]]:
+        """Force ``Rescue_Robot`` now (the viewer's Rescue button)."""
+        self._rescue()
+        return self._obs(), self._info()
+
+    # -- internals ---------------------------------------------------------------------
+    def set_goal(self, name: str) -> None:
+        """Make ``name`` the active goal (the cameras see only its plate)."""
+        self.world_arena = self.world_arena.with_active_goal(name)
+        self.sensors.set_goal(self.world_arena.goal().at, self._other_plates())
+        self.goal_name = name
+
+    def _other_plates(self) -> list[Point]:
+        """The plates of every goal but the active one (a misread takes one for it)."""
+        active = self.world_arena.active_goal
+        return [g.at for g in self.world_arena.goals if g.name != active]
+
+    def _moves_with_errors(self) -> bool:
+        """The motion model is on, or domain randomization may switch it on."""
+        return motion_on(self.config.realism) or any(
+            k.startswith("motion.") for k in self.config.realism.randomize
+        )
+
+    def _act_with_errors(self, action: int) -> None:
+        """The action as a real differential drive does it (:class:`MotionErrors`)."""
+        motion, rng = self.motion, self.np_random
+        assert motion is not None
+        if action in (Action.FORWARD, Action.REVERSE):
+            sign = 1.0 if action == Action.FORWARD else -1.0
+            self.world.drive(0, *motion.move(sign, self.move_distance, rng))
+        elif action == Action.ROTATE_LEFT:
+            self.world.drive(0, 0.0, motion.turn(self.turn_arc, rng))
+        elif action == Action.ROTATE_RIGHT:
+            self.world.drive(0, 0.0, -motion.turn(self.turn_arc, rng))
+
+    def _rescue(self) -> None:
+        rescue_robot(self.world, 0, self.config.rescue, self.move_distance, self.np_random)
+        self._sense()
+        self.rescued = True
+        self.has_been_rescued = True
+
+    def _reset_counters(self) -> None:
+        self.steps = 0
+        self.bumps = 0
+        self.episode_reward = 0.0
+        self.has_been_rescued = False
+        self.rescued = False
+        self.judgement: Judgement | None = None
+        self.last_action: int | None = None
+        self.keyword: int | None = None
+        self._check_rescue = False
+
+    def _sense(self, action: int | None = None) -> tuple[bool, bool]:
+        """Read the sensors after ``action`` (None: a reset or a rescue), update the memory;
+        sets ``state_key`` and returns ``(bump, goal_close)``."""
+        self._pose = self.world.pose(0)
+        key, bump, goal_close = self.sensors.sense(self._pose, self.np_random)
+        if self.memory.on:
+            self.memory.update(*self.sensors.sightings(), action)
+            key = self.memory.key(key, self._memory_bits)
+        self.state_key = key
+        return bump, goal_close
+
+    @property
+    def readings(self) -> Readings:
+        """The last reading of every sensor (noised distances, rays, markers seen)."""
+        return self.sensors.last()[0]
+
+    @property
+    def codes(self) -> tuple[int, ...]:
+        """The state in keyword order (the observation): the encoded last reading, then
+        the memory's codes when it is on."""
+        return self.sensors.last()[1] + self.memory.codes
+
+    def _obs(self) -> np.ndarray:
+        return np.array(self.codes, dtype=np.int64)
+
+    def _info(self) -> dict[str, Any]:
+        r = self.readings
+        j = self.judgement
+        return {
+            "pose": self.world.pose(0),
+            "sonar": r.sonar.tolist(),
+            "goal_cam": r.goal.tolist(),
+            "eow_cam": r.eow.tolist(),
+            "compass": r.compass,
+            "state_key": self.state_key,
+            "keyword": NO_KEYWORD if self.keyword is None else self.keyword,
+            "event": RESET_EVENT if j is None else j.event,
+            "rescued": self.rescued,
+            "has_been_rescued": self.has_been_rescued,
+            "reward_terms": dict(j.terms) if j is not None else dict.fromkeys(TERMS, 0.0),
+            "steps": self.steps,
+            "bumps": self.bumps,
+            "goal": self.goal_name,
+        }

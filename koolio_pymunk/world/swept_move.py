@@ -1,0 +1,118 @@
+"""A robot's move against the walls, compiled: the pymunk world's swept move without Python.
+
+:meth:`koolio_pymunk.world.physics.World.shift` moves a robot as a swept circle, asking
+pymunk (Chipmunk) for each contact; :func:`sweep` here is the same move in one numba
+call, for compiled loops that move robots themselves (an episode or a fleet step):
+
+* the same steps in the same floating-point operations (contact, push-out by
+  :data:`~koolio_pymunk.world.physics.SKIN`, the rest projected on the wall's tangent,
+  at most :data:`~koolio_pymunk.world.physics.MAX_QUERIES` queries, a slide back into the
+  wall met before or shorter than :data:`~koolio_pymunk.world.physics.MIN_SLIDE` ending
+  the move) as :func:`koolio_pymunk.world.physics.sweep`;
+* each contact from :func:`koolio_pymunk.world.segment_query.first_contact`, Chipmunk's
+  segment query with the robot's radius written out operation for operation, on the
+  walls pymunk holds (:func:`~koolio_pymunk.world.segment_query.wall_array`);
+* walls are culled once per move to those whose box comes within the move's length plus
+  the radius of the start (no position of the move is farther: slides are projections,
+  never longer than what remains), which cannot change the answer.
+
+:func:`move` is a Forward / Reverse of ``distance`` along ``heading``, as
+:meth:`~koolio_pymunk.world.physics.World.move` computes it.
+``tests/world/test_segment_query.py`` and ``tools/agreement.py --moves N`` hold both to
+pymunk's answers: the same end position, bit for bit, over random moves in every shipped
+arena and in generated ones.
+
+Example::
+
+    >>> from koolio_pymunk.world.physics import World
+    >>> from koolio_pymunk.world.segment_query import wall_array
+    >>> w = World.from_segments([((0, 0), (100, 0)), ((100, 0), (100, 100)),
+    ...                          ((100, 100), (0, 100)), ((0, 100), (0, 0))], radius=10)
+    >>> walls = wall_array(w)
+    >>> move(walls, 50.0, 50.0, 0.0, 12.0, 10.0)
+    (62.0, 50.0)
+    >>> x, y = move(walls, 85.0, 50.0, 0.0, 12.0, 10.0)     # stops tangent to x = 100
+    >>> w.place(0, (85.0, 50.0), 0.0); w.move(0, 12.0)
+    >>> (x, y) == w.pose()[:2], round(x, 6)
+    (True, 90.0)
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from .physics import ALONG, MAX_QUERIES, MIN_SLIDE, SKIN
+from .segment_query import _CULL_MARGIN, first_contact
+
+# numba bakes these module-level constants into the compiled (and disk-cached) code; the
+# cache is keyed on this file, so a change of them in physics.py needs this file touched
+# (or the __pycache__ cleared). The agreement tests catch a stale cache.
+
+
+@numba.njit(cache=True)
+def _walls_near(x: float, y: float, reach: float, walls: np.ndarray, active: np.ndarray) -> int:
+    """Fill ``active`` with the walls whose box comes within ``reach`` (plus the cull
+    margin) of ``(x, y)`` in x and in y, in wall order; returns how many."""
+    x0 = x - reach - _CULL_MARGIN
+    x1 = x + reach + _CULL_MARGIN
+    y0 = y - reach - _CULL_MARGIN
+    y1 = y + reach + _CULL_MARGIN
+    n = 0
+    for k in range(walls.shape[0]):
+        if walls[k, 6] > x1 or walls[k, 8] < x0 or walls[k, 7] > y1 or walls[k, 9] < y0:
+            continue
+        active[n] = k
+        n += 1
+    return n
+
+
+@numba.njit(cache=True)
+def sweep(
+    walls: np.ndarray, x: float, y: float, dx: float, dy: float, radius: float
+) -> tuple[float, float]:
+    """Where a robot of ``radius`` at ``(x, y)`` ends after a move by ``(dx, dy)`` against
+    ``walls`` (:func:`~koolio_pymunk.world.segment_query.wall_array`): stopped by the
+    first wall, sliding along it. :func:`koolio_pymunk.world.physics.sweep` with the
+    walls' pymunk queries, bit for bit."""
+    active = np.empty(walls.shape[0], np.int64)
+    n = _walls_near(x, y, abs(dx) + abs(dy) + radius, walls, active)
+    pnx = 0.0
+    pny = 0.0
+    for k in range(MAX_QUERIES):
+        if dx == 0.0 and dy == 0.0:
+            break
+        alpha, nx, ny = first_contact(x, y, dx, dy, radius, walls, active, n)
+        if alpha >= 1.0:
+            return x + dx, y + dy
+        x = x + alpha * dx + SKIN * nx
+        y = y + alpha * dy + SKIN * ny
+        rest = 1.0 - alpha
+        rx = rest * dx
+        ry = rest * dy
+        dn = rx * nx + ry * ny
+        rx = rx - dn * nx
+        ry = ry - dn * ny
+        slide = math.sqrt(rx * rx + ry * ry)
+        if slide < MIN_SLIDE:
+            break
+        if k > 0 and rx * pnx + ry * pny < -ALONG * slide:
+            break
+        dx = rx
+        dy = ry
+        pnx = nx
+        pny = ny
+    return x, y
+
+
+@numba.njit(cache=True)
+def move(
+    walls: np.ndarray, x: float, y: float, heading: float, distance: float, radius: float
+) -> tuple[float, float]:
+    """A robot of ``radius`` at ``(x, y)`` moves ``distance`` inches along ``heading``
+    (radians; a negative distance backs up): its end position, as
+    :meth:`~koolio_pymunk.world.physics.World.move` (and :meth:`~World.act`'s Forward and
+    Reverse) leave it."""
+    return sweep(walls, x, y, distance * math.cos(heading), distance * math.sin(heading), radius)

@@ -1,0 +1,257 @@
+"""koolio-pm: tiny-budget smoke tests of every core command and its bad-input errors."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from koolio_pymunk.apps.cli import main
+
+
+def cli(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-m", "koolio_pymunk.apps.cli", *args],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        timeout=120,
+    )
+
+
+def one_line_error(p: subprocess.CompletedProcess, *words: str) -> None:
+    assert p.returncode == 2, p.stderr
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1, p.stderr
+    assert "Traceback" not in p.stderr
+    for w in words:
+        assert w in lines[0], lines[0]
+
+
+def tiny_config(tmp_path: Path) -> Path:
+    cfg = tmp_path / "tiny.yaml"
+    cfg.write_text("episode: {max_steps: 40}\n")
+    return cfg
+
+
+def test_train_then_eval_then_info(tmp_path) -> None:
+    cfg = tiny_config(tmp_path)
+    q, log = tmp_path / "q.qtable", tmp_path / "log.csv"
+    p = cli(
+        "train",
+        "--arena",
+        "room",
+        "--episodes",
+        "3",
+        "--seed",
+        "1",
+        "--qtable",
+        str(q),
+        "--log",
+        str(log),
+        "--config",
+        str(cfg),
+    )
+    assert p.returncode == 0, p.stderr
+    assert "configuration:" not in p.stdout  # behind --verbose
+    assert "training goal rate" in p.stdout and "steps/s" in p.stdout
+    assert q.exists() and Path(str(q) + ".bak").exists()
+    assert len(log.read_text().splitlines()) == 4
+    p = cli(
+        "eval",
+        "--arena",
+        "room",
+        "--qtable",
+        str(q),
+        "--episodes",
+        "2",
+        "--json",
+        "--config",
+        str(cfg),
+    )
+    assert p.returncode == 0, p.stderr
+    figures = json.loads(p.stdout)
+    assert figures["episodes"] == 2 and 0 <= figures["goal_rate"] <= 1
+    p = cli("info", "--qtable", str(q))
+    assert p.returncode == 0
+    assert "238.4 GiB" in p.stdout and "113.9 MiB" in p.stdout and "2,985,984" in p.stdout
+    assert "GoalCam0<<25" in p.stdout and "Sonar7<<3" in p.stdout
+
+
+def test_eval_goal_all_prints_every_door(tmp_path, capsys) -> None:
+    cfg = tiny_config(tmp_path)
+    q = tmp_path / "q.qtable"
+    assert (
+        main(
+            [
+                "train",
+                "--arena",
+                "hallway",
+                "--episodes",
+                "1",
+                "--qtable",
+                str(q),
+                "--log",
+                str(tmp_path / "l.csv"),
+                "--config",
+                str(cfg),
+                "--quiet",
+            ]
+        )
+        == 0
+    )
+    assert (
+        main(["eval", "--qtable", str(q), "--episodes", "1", "--goal", "all", "--config", str(cfg)])
+        == 0
+    )
+    out = capsys.readouterr().out
+    for room in ("301", "302", "311", "318"):
+        assert f" {room} " in out
+    assert " all " in out
+
+
+def test_check_arena_ok_and_bad(tmp_path) -> None:
+    p = cli("check-arena", "hallway")
+    assert p.returncode == 0 and "ok" in p.stdout and "1728 x 184 in" in p.stdout
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("name: x\nwals: [[0, 0], [1, 0], [1, 1]]\n")
+    one_line_error(cli("check-arena", str(bad)), "bad.yaml", "wals", "did you mean 'walls'")
+    one_line_error(cli("check-arena", str(tmp_path / "missing.yaml")), "missing.yaml")
+
+
+def test_bad_flags_and_bad_files_are_one_line_exit_2(tmp_path) -> None:
+    one_line_error(cli("train", "--episodes", "many"), "--episodes", "invalid int")
+    one_line_error(cli("train", "--frobnicate"), "unrecognized arguments")
+    one_line_error(cli("train", "--episodes", "-1", "--qtable", str(tmp_path / "q")), "--episodes")
+    corrupt = tmp_path / "c.qtable"
+    corrupt.write_bytes(b"KOOLIOQT" + b"\x00" * 40)
+    one_line_error(cli("eval", "--qtable", str(corrupt)), "c.qtable")
+    cfg = tmp_path / "cfg.yaml"
+    cfg.write_text("learner: {alpah: 0.1}\n")
+    one_line_error(
+        cli("train", "--config", str(cfg), "--qtable", str(tmp_path / "q")),
+        "cfg.yaml",
+        "learner.alpah",
+        "did you mean 'alpha'",
+    )
+    cfg.write_text("actions: {move_action_distance: 50}\n")
+    one_line_error(
+        cli("train", "--config", str(cfg), "--qtable", str(tmp_path / "q")),
+        "actions.move_action_distance",
+    )
+    one_line_error(
+        cli("train", "--goal", "999", "--qtable", str(tmp_path / "q")), "no goal named '999'"
+    )
+
+
+def test_mismatched_table_is_refused_and_untouched(tmp_path) -> None:
+    cfg = tiny_config(tmp_path)
+    q = tmp_path / "q.qtable"
+    assert (
+        cli(
+            "train",
+            "--arena",
+            "room",
+            "--episodes",
+            "1",
+            "--qtable",
+            str(q),
+            "--log",
+            str(tmp_path / "l.csv"),
+            "--config",
+            str(cfg),
+            "--quiet",
+        ).returncode
+        == 0
+    )
+    before = q.read_bytes()
+    other = tmp_path / "other.yaml"
+    other.write_text("episode: {max_steps: 40}\nsensors: {sonar: {sonar_arc_deg: 40}}\n")
+    p = cli(
+        "train",
+        "--arena",
+        "room",
+        "--episodes",
+        "1",
+        "--qtable",
+        str(q),
+        "--config",
+        str(other),
+        "--log",
+        str(tmp_path / "l.csv"),
+    )
+    one_line_error(p, "q.qtable", "sensors.sonar_arc_deg")
+    assert q.read_bytes() == before
+
+
+@pytest.mark.parametrize(
+    "command", ["train", "eval", "check-arena", "info", "view", "plot", "export", "sweep"]
+)
+def test_every_command_has_help(command: str) -> None:
+    p = cli(command, "--help")
+    assert p.returncode == 0 and "usage:" in p.stdout
+
+
+def test_eval_reads_an_exported_policy(tmp_path) -> None:
+    cfg = tiny_config(tmp_path)
+    q, pol = tmp_path / "q.qtable", tmp_path / "policy.json"
+    assert (
+        main(
+            [
+                "train",
+                "--arena",
+                "room",
+                "--episodes",
+                "2",
+                "--qtable",
+                str(q),
+                "--log",
+                str(tmp_path / "l.csv"),
+                "--config",
+                str(cfg),
+                "--quiet",
+            ]
+        )
+        == 0
+    )
+    assert main(["export", "--qtable", str(q), "--out", str(pol)]) == 0
+    a = cli(
+        "eval",
+        "--arena",
+        "room",
+        "--qtable",
+        str(q),
+        "--episodes",
+        "2",
+        "--json",
+        "--config",
+        str(cfg),
+    )
+    b = cli(
+        "eval",
+        "--arena",
+        "room",
+        "--qtable",
+        str(pol),
+        "--episodes",
+        "2",
+        "--json",
+        "--config",
+        str(cfg),
+    )
+    assert a.returncode == b.returncode == 0
+    assert json.loads(a.stdout) == json.loads(b.stdout)
+
+
+def test_closed_output_pipe_is_not_an_error() -> None:
+    p = subprocess.run(
+        f"{sys.executable} -m koolio_pymunk.apps.cli info | head -c 10",
+        shell=True,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert p.stdout == "State spac" and p.stderr == ""

@@ -1,0 +1,201 @@
+"""koolio-pm export, the koolio-policy format, load_any_table and --init-qtable."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from koolio_pymunk import robot_runtime as rt
+from koolio_pymunk.apps import cli
+from koolio_pymunk.apps.export import load_any_table, policy_document, write_policy
+from koolio_pymunk.learning.qlearning import QLearner
+from koolio_pymunk.learning.qtable import (
+    QTableStore,
+    check_compatible,
+    load_qtable,
+    sensor_signature,
+)
+from koolio_pymunk.learning.training import train
+from koolio_pymunk.store.config import load_config
+from koolio_pymunk.store.errors import QTableError
+from koolio_pymunk.task.env import KoolioEnv
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory):
+    """A small table trained on the hallway (a few short episodes), and its env."""
+    d = tmp_path_factory.mktemp("trained")
+    env = KoolioEnv(max_steps=120)
+    store = QTableStore(d / "t.qtable")
+    result = train(env, store, episodes=4, seed=3, report=None)
+    return env, result.table, d / "t.qtable"
+
+
+def test_runtime_greedy_matches_simulator_for_every_state(trained, tmp_path):
+    env, table, _ = trained
+    out = tmp_path / "p.json"
+    write_policy(policy_document(table), out)
+    policy = rt.Policy.load(str(out))
+    agent = QLearner(table, env.config.learner, np.random.default_rng(0))
+    assert len(policy.rows) == len(table) > 50
+    unique = 0
+    for state, row in table.rows.items():
+        best = max(row)
+        sim_ties = [a for a, q in enumerate(row) if q == best]
+        assert policy.greedy_actions(state) == sim_ties
+        assert agent.greedy(state) in sim_ties
+        if len(sim_ties) == 1:
+            unique += 1
+            assert policy.greedy(state) == agent.greedy(state) == sim_ties[0]
+        # keyword encoding and decoding agree with qtable.KeywordLayout
+        codes, _ = env.layout.decode(state << env.layout.action_bits)
+        for a in range(5):
+            assert policy.layout.keyword(codes, a) == env.layout.keyword(codes, a)
+        assert policy.layout.decode((state << 3) | 4) == (codes, 4)
+    assert unique > 20
+    doc = json.loads(out.read_text())
+    greedy = {g["state"]: g["action"] for g in doc["greedy"]}
+    assert all(
+        greedy[s] == max(range(5), key=lambda a, r=r: (r[a], -a)) for s, r in table.rows.items()
+    )
+
+
+def test_export_header_fields(trained, tmp_path):
+    env, table, path = trained
+    out = tmp_path / "p.json"
+    assert cli.main(["export", "--qtable", str(path), "--out", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    assert (doc["format"], doc["version"]) == ("koolio-policy", 1)
+    lay = doc["layout"]
+    assert lay["total_bits"] == 27 and lay["action_bits"] == 3
+    assert [f["shift"] for f in lay["fields"]] == [25, 23, 21, 19, 17, 15, 13, 11, 9, 7, 5, 3]
+    assert doc["encoding"]["thresholds"] == {"sonar": [6.0, 24.0, 60.0], "camera": [36.0, 96.0]}
+    assert doc["encoding"]["sonar_groups"] == [[0], [1, 2], [3], [4], [5, 6], [7]]
+    assert doc["sensors"] == sensor_signature(env.config)
+    assert doc["episodes"] == 4 and doc["n_states"] == len(table)
+    assert len(doc["entries"]) == 5 * len(table)
+    kws = [e["keyword"] for e in doc["entries"]]
+    assert kws == sorted(kws)
+    state, row = next(iter(sorted(table.rows.items())))
+    assert doc["entries"][:5] == [{"keyword": (state << 3) | a, "q": row[a]} for a in range(5)]
+
+
+def test_runtime_encoding_matches_simulator(tmp_path):
+    """Raw readings of 300 random steps encode to the simulator's codes (also None=unseen)."""
+    cfg = load_config(overrides={"sensors": {"compass": {"in_state": True}}})
+    env = KoolioEnv(config=cfg, max_steps=300)
+    table = QTableStore(tmp_path / "c.qtable").open(env.layout, sensor_signature(cfg), 0.0)
+    write_policy(policy_document(table, cfg), tmp_path / "c.json")
+    policy = rt.Policy.load(str(tmp_path / "c.json"))
+    assert len(policy.layout.levels) == 13
+    rng = np.random.default_rng(5)
+    env.reset(seed=11)
+    seen_codes = set()
+    for _ in range(300):
+        r = env.readings
+        far = env.config.sensors.really_long_distance
+        unseen = [[None if v >= far else float(v) for v in cam] for cam in (r.goal, r.eow)]
+        for goal, eow in ((r.goal.tolist(), r.eow.tolist()), unseen):
+            codes = policy.encode(r.sonar.tolist(), goal, eow, compass=r.compass)
+            assert codes == env.codes
+            assert policy.state_key(codes) == env.state_key
+        seen_codes.update(env.codes[:12])
+        _, _, term, trunc, _ = env.step(int(rng.integers(5)))
+        if term or trunc:
+            env.reset()
+    assert seen_codes == {0, 1, 2, 3}
+
+
+def test_encoding_boundaries_match_searchsorted(trained, tmp_path):
+    _, table, _ = trained
+    write_policy(policy_document(table), tmp_path / "p.json")
+    enc = rt.Policy.load(str(tmp_path / "p.json")).encoder
+    for v in (0.0, 5.999, 6.0, 23.9, 24.0, 59.99, 60.0, 1e4):
+        codes = enc.encode([v] * 8, [v] * 3, [v] * 3)
+        son = int(np.searchsorted([6.0, 24.0, 60.0], v, side="right"))
+        cam = 2 if v > 240 else int(np.searchsorted([36.0, 96.0], v, side="right"))
+        assert codes == (cam,) * 6 + (son,) * 6
+
+
+def test_qtable_policy_qtable_round_trip_is_byte_exact(trained, tmp_path):
+    _, _, path = trained
+    pol, back = tmp_path / "p.json", tmp_path / "back.qtable"
+    assert cli.main(["export", "--qtable", str(path), "--out", str(pol)]) == 0
+    assert cli.main(["export", "--qtable", str(pol), "--out", str(back)]) == 0
+    assert back.read_bytes() == path.read_bytes()
+    assert load_any_table(pol).rows == load_qtable(path).rows
+
+
+def test_init_qtable_from_policy_continues_learning(trained, tmp_path):
+    env, table, _ = trained
+    pol = tmp_path / "p.json"
+    write_policy(policy_document(table), pol)
+    loaded = load_any_table(pol)
+    check_compatible(loaded, env.layout, sensor_signature(env.config), str(pol))
+    cfg = tmp_path / "short.yaml"
+    cfg.write_text("episode: {max_steps: 30}\n")
+    new = tmp_path / "new.qtable"
+    # --episodes is the total: the policy's 4 episodes, then 1 more
+    argv = ["train", "--config", str(cfg), "--episodes", "5", "--quiet", "--log", ""]
+    code = cli.main([*argv, "--qtable", str(new), "--init-qtable", str(pol)])
+    assert code == 0
+    after = load_qtable(new)
+    assert after.meta["episodes"] == 5
+    assert set(table.rows) <= set(after.rows)
+
+
+def test_init_qtable_refuses_other_sensor_layout(trained, tmp_path, capsys):
+    _, table, _ = trained
+    pol = tmp_path / "p.json"
+    write_policy(policy_document(table), pol)
+    cfg = tmp_path / "other.yaml"
+    cfg.write_text("sensors: {sonar: {sub_arcs: 5}}\n")
+    argv = ["train", "--config", str(cfg), "--episodes", "1", "--quiet", "--log", ""]
+    code = cli.main([*argv, "--qtable", str(tmp_path / "n.qtable"), "--init-qtable", str(pol)])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err.count("\n") == 1
+    assert "sensors.sub_arcs: table made for 11, this run uses 5" in err
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (lambda d: d.update(version=2), "version: unsupported version 2 (this reader knows 1)"),
+        (lambda d: d.update(format="other"), "format: not a koolio-policy file"),
+        (lambda d: d["entries"].append(dict(d["entries"][0])), "repeated"),
+        (lambda d: d["entries"][0].update(keyword=1 << 27), "out of range"),
+        (lambda d: d["entries"][0].update(keyword=(d["entries"][0]["keyword"] | 7)), "range"),
+        (lambda d: d["entries"][0].update(q="x"), "entries[0]: needs an integer keyword"),
+        (lambda d: d["layout"]["fields"][0].update(shift=24), "fields[0].shift: 24, expected 25"),
+        (lambda d: d["encoding"]["thresholds"].update(sonar=[6, 5]), "must be increasing"),
+        (lambda d: d.pop("sensors"), "sensors: missing"),
+    ],
+)
+def test_bad_policy_files_are_refused_in_one_line(trained, tmp_path, edit, message):
+    _, table, _ = trained
+    doc = policy_document(table)
+    edit(doc)
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(doc))
+    with pytest.raises(QTableError) as info:
+        load_any_table(bad)
+    assert message in str(info.value)
+    assert str(info.value).startswith(str(bad))
+    assert "\n" not in str(info.value)
+
+
+def test_non_table_files_are_refused(tmp_path, capsys):
+    junk = tmp_path / "junk.txt"
+    junk.write_text("hello")
+    nan = tmp_path / "nan.json"
+    nan.write_text('{"format": "koolio-policy", "q": NaN}')
+    with pytest.raises(QTableError, match=r"neither a \.qtable file nor a koolio-policy"):
+        load_any_table(junk)
+    with pytest.raises(QTableError, match="invalid JSON"):
+        load_any_table(nan)
+    code = cli.main(["export", "--qtable", str(tmp_path / "missing"), "--out", "x.json"])
+    assert code == 2
+    assert "missing: cannot read" in capsys.readouterr().err

@@ -1,0 +1,208 @@
+"""koolio-pm sweep: spec parsing, local processes vs Ray (same results), resume, outputs."""
+
+from __future__ import annotations
+
+import csv
+import shutil
+import sys
+from pathlib import Path
+
+import pytest
+
+from koolio_pymunk.apps import cli
+from koolio_pymunk.apps.sweep import TIMING_COLUMNS, load_spec, parse_spec, plan, run_sweep
+from koolio_pymunk.store.errors import ConfigError
+
+SPEC = """
+name: tiny
+episodes: 3
+seeds: [0, 1]
+base: {episode: {max_steps: 40}}
+grid:
+  learner.alpha: [0.1, 0.5]
+eval_every: 2
+eval_episodes: 1
+"""
+
+
+@pytest.fixture
+def spec_file(tmp_path) -> Path:
+    path = tmp_path / "tiny.yaml"
+    path.write_text(SPEC)
+    return path
+
+
+def _rows(out: Path) -> list[dict[str, str]]:
+    with open(out / "results.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    return [{k: v for k, v in r.items() if k not in TIMING_COLUMNS} for r in rows]
+
+
+def _tables(out: Path) -> dict[str, bytes]:
+    return {
+        str(p.relative_to(out)): p.read_bytes() for p in sorted(out.glob("runs/*/*/qtable.qtable"))
+    }
+
+
+def test_local_processes_and_ray_give_identical_results(spec_file, tmp_path):
+    ray = pytest.importorskip("ray")
+    spec = load_spec(spec_file)
+    local = run_sweep(spec, tmp_path / "local", workers=2, plot=False, report=None)
+    assert (local.ran, local.skipped, local.failed) == (4, 0, [])
+    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
+    try:
+        remote = run_sweep(spec, tmp_path / "ray", ray_address="", plot=False, report=None)
+        assert ray.is_initialized()  # the sweep used the test's instance and left it running
+    finally:
+        ray.shutdown()
+    assert (remote.ran, remote.failed) == (4, [])
+    rows = _rows(tmp_path / "local")
+    assert rows == _rows(tmp_path / "ray")
+    assert [r["run_id"] for r in rows] == [t["run_id"] for t in plan(spec)]
+    assert {r["learner.alpha"] for r in rows} == {"0.1", "0.5"}
+    assert len({r["table_sha256"] for r in rows}) == 4
+    assert _tables(tmp_path / "local") == _tables(tmp_path / "ray")
+    for name in ("train.csv", "evals.csv"):
+        a = [_untimed(p) for p in sorted((tmp_path / "local").glob(f"runs/*/*/{name}"))]
+        b = [_untimed(p) for p in sorted((tmp_path / "ray").glob(f"runs/*/*/{name}"))]
+        assert len(a) == 4
+        assert a == b
+
+
+def _untimed(path: Path) -> list[dict[str, str]]:
+    with open(path, newline="") as fh:
+        return [{k: v for k, v in r.items() if k != "train_seconds"} for r in csv.DictReader(fh)]
+
+
+def test_resume_skips_finished_runs_and_matches(spec_file, tmp_path, capsys):
+    out = tmp_path / "out"
+    argv = ["sweep", str(spec_file), "--out", str(out), "--workers", "1"]
+    assert cli.main(argv) == 0
+    first = _rows(out)
+    assert len(first) == 4
+    evals = (out / "runs" / first[0]["run_id"] / "evals.csv").read_text().splitlines()
+    assert evals[0].startswith("episode,goal_rate,mean_steps,mean_bumps")
+    assert [line.split(",")[0] for line in evals[1:]] == ["2", "3"]
+    train_log = (out / "runs" / first[0]["run_id"] / "train.csv").read_text().splitlines()
+    assert train_log[0] == "episode,reward,steps,bumps,outcome,rescued,epsilon,goal"
+    assert len(train_log) == 4
+    assert (out / "curves.png").read_bytes()[:4] == b"\x89PNG"
+    # lose one run entirely and another's results.csv row only (its result.json remains)
+    lines = (out / "results.csv").read_text().splitlines()
+    (out / "results.csv").write_text("\n".join(lines[:3]) + "\n")
+    shutil.rmtree(out / "runs" / first[2]["run_id"])
+    capsys.readouterr()
+    outcome = run_sweep(load_spec(spec_file), out, workers=1, plot=False, report=print)
+    said = capsys.readouterr().out
+    assert "4 runs (3 already done, 1 to run)" in said
+    assert (outcome.ran, outcome.skipped) == (1, 3)
+    assert _rows(out) == first
+
+
+def test_spec_grid_and_runs_make_configurations(tmp_path):
+    spec = parse_spec(
+        {
+            "episodes": 5,
+            "seeds": 2,
+            "goal": 302,
+            "base": {"actions": {"move_action_distance": 6}},
+            "grid": {"learner.gamma": [0.9, 0.99], "robot.profile": ["koolio", "tjpro"]},
+            "runs": [{"name": "a"}, {"name": "b", "rewards": {"bump": -3}, "goal": "random"}],
+        },
+        "s.yaml",
+    )
+    tasks = plan(spec)
+    assert len(tasks) == 2 * 2 * 2 * 2
+    assert len({t["config_id"] for t in tasks}) == 8
+    assert tasks[0]["label"] == "a gamma=0.9 profile=koolio"
+    assert {t["goal"] for t in tasks} == {"302", "random"}
+    b = [t for t in tasks if t["label"].startswith("b ")]
+    assert {t["config"]["rewards"]["bump"] for t in b} == {-3.0}
+    assert {t["config"]["robot"]["profile"] for t in tasks} == {"koolio", "tjpro"}
+    assert [t["seed"] for t in tasks[:4]] == [0, 1, 0, 1]
+
+
+def test_rotate_deg_sweeps_the_arena_rotation_without_a_copy_of_the_file():
+    runs = [{"name": "file"}, {"name": "r", "rotate_deg": 5}]
+    spec = parse_spec({"episodes": 2, "rotate_deg": 2, "runs": runs}, "s.yaml")
+    tasks = plan(spec)
+    assert [t["arena_obj"].rotate_deg for t in tasks] == [2.0, 5.0]
+    assert [t["rotate_deg"] for t in tasks] == [2.0, 5.0]
+    assert {t["arena"] for t in tasks} == {"hallway"}
+    assert len({t["config_id"] for t in tasks}) == 2  # the rotation is part of the hash
+    plain = plan(parse_spec({"episodes": 2}, "s.yaml"))[0]
+    zero = plan(parse_spec({"episodes": 2, "grid": {"rotate_deg": [0]}}, "s.yaml"))[0]
+    assert plain["arena_obj"].rotate_deg == zero["arena_obj"].rotate_deg == 0.0
+    assert plain["config_id"].split("-")[-1] == zero["config_id"].split("-")[-1]
+    with pytest.raises(ConfigError, match=r"s.yaml: grid: rotate_deg: expected a finite num"):
+        plan(parse_spec({"episodes": 2, "grid": {"rotate_deg": ["five"]}}, "s.yaml"))
+    with pytest.raises(ConfigError, match=r"s.yaml: rotate_deg: expected a finite number"):
+        parse_spec({"episodes": 2, "rotate_deg": float("nan")}, "s.yaml")
+
+
+def test_summary_reports_spread_and_table_size(spec_file, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert cli.main(["sweep", str(spec_file), "--out", str(out), "--workers", "1"]) == 0
+    said = capsys.readouterr().out
+    assert "min-max" in said and "states" in said
+    with open(out / "configs.csv", newline="") as fh:
+        configs = list(csv.DictReader(fh))
+    rows = _rows(out)
+    for c in configs:
+        mine = [r for r in rows if r["config_id"] == c["config_id"]]
+        rates = [float(r["final_goal_rate"]) for r in mine]
+        states = [int(r["states"]) for r in mine]
+        assert float(c["final_goal_rate_min"]) == min(rates)
+        assert float(c["final_goal_rate_max"]) == max(rates)
+        assert float(c["states_mean"]) == sum(states) / len(states)
+        assert int(c["state_space"]) == 3**6 * 4**6  # the paper's 2,985,984 states
+
+
+@pytest.mark.parametrize(
+    ("data", "message"),
+    [
+        ({}, "s.yaml: episodes: missing"),
+        ({"episodes": 3, "sedes": 2}, "s.yaml: sedes: unknown key (did you mean 'seeds'?)"),
+        ({"episodes": 3, "grid": {"learner.alpha": 0.1}}, "grid.learner.alpha: must be a non"),
+        ({"episodes": 3, "seeds": [1, 1]}, "s.yaml: seeds: a seed is listed twice"),
+        ({"episodes": 0}, "s.yaml: episodes: must be >= 1, got 0"),
+        ({"episodes": 3, "competence": 2}, "s.yaml: competence: must be in (0, 1]"),
+    ],
+)
+def test_bad_specs_fail_in_one_line(data, message):
+    with pytest.raises(ConfigError) as info:
+        parse_spec(data, "s.yaml")
+    assert message in str(info.value)
+
+
+@pytest.mark.parametrize(
+    ("data", "message"),
+    [
+        (
+            {"episodes": 3, "grid": {"learner.alfa": [0.1]}},
+            "s.yaml: grid: learner.alfa: unknown key",
+        ),
+        ({"episodes": 3, "grid": {"learner.alpha": [2.0]}}, "learner.alpha: must be in (0, 1]"),
+        ({"episodes": 3, "goal": "999"}, "goal: no goal named '999'"),
+        ({"episodes": 3, "runs": [{"name": "x"}, {"name": "x"}]}, "'x' repeats the config"),
+    ],
+)
+def test_bad_parameters_fail_before_running(data, message):
+    with pytest.raises(ConfigError) as info:
+        plan(parse_spec(data, "s.yaml"))
+    assert message in str(info.value)
+    assert "\n" not in str(info.value)
+
+
+def test_cli_dry_run_and_missing_ray(spec_file, tmp_path, capsys, monkeypatch):
+    assert cli.main(["sweep", str(spec_file), "--dry-run"]) == 0
+    out = capsys.readouterr().out
+    assert "2 configurations x 2 seeds" in out and "alpha=0.1-" in out
+    assert cli.main(["sweep", str(spec_file.with_name("nope.yaml"))]) == 2
+    assert "nope.yaml: file not found" in capsys.readouterr().err
+    monkeypatch.setitem(sys.modules, "ray", None)  # as if Ray were not installed
+    assert cli.main(["sweep", str(spec_file), "--ray", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err == (
+        "koolio-pm: error: --ray: Ray is not installed (pip install 'koolio-pymunk[ray]')\n"
+    )

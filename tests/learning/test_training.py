@@ -1,0 +1,101 @@
+"""Training loop: reproducibility, resume, Exit / Exit Without Save, evaluation."""
+
+from __future__ import annotations
+
+import csv
+
+import pytest
+
+from koolio_pymunk.learning.qtable import QTableStore, load_qtable
+from koolio_pymunk.learning.training import LOG_FIELDS, evaluate, train
+from koolio_pymunk.store.config import Config
+from koolio_pymunk.task.env import KoolioEnv
+
+
+def small_env() -> KoolioEnv:
+    cfg = Config()
+    cfg.episode.max_steps = 60
+    return KoolioEnv("room", config=cfg)
+
+
+def run(tmp_path, name: str, episodes: int, seed: int = 0, **kw):
+    q = tmp_path / f"{name}.qtable"
+    log = tmp_path / f"{name}.csv"
+    res = train(small_env(), QTableStore(q), episodes, seed, log, report=None, **kw)
+    return q, log, res
+
+
+def test_same_seed_same_bytes(tmp_path) -> None:
+    qa, la, _ = run(tmp_path, "a", 6)
+    qb, lb, _ = run(tmp_path, "b", 6)
+    qc, _, _ = run(tmp_path, "c", 6, seed=1)
+    assert qa.read_bytes() == qb.read_bytes()
+    assert la.read_bytes() == lb.read_bytes()
+    assert qa.read_bytes() != qc.read_bytes()
+
+
+def test_resume_continues_exactly(tmp_path) -> None:
+    q_full, log_full, _ = run(tmp_path, "full", 7)
+    q_part, log_part, _ = run(tmp_path, "part", 4)
+    run(tmp_path, "part", 3)  # resumes from part.qtable: episodes 4..6
+    assert q_part.read_bytes() == q_full.read_bytes()
+    assert log_part.read_bytes() == log_full.read_bytes()
+
+
+def test_log_format(tmp_path) -> None:
+    _, log, res = run(tmp_path, "a", 3)
+    rows = list(csv.DictReader(log.open()))
+    assert tuple(rows[0].keys()) == LOG_FIELDS
+    assert [int(r["episode"]) for r in rows] == [0, 1, 2]
+    assert all(r["outcome"] in ("goal", "end_of_world", "truncated") for r in rows)
+    assert [int(r["steps"]) for r in rows] == [r.steps for r in res.results]
+    assert load_qtable(tmp_path / "a.qtable").meta["episodes"] == 3
+
+
+def _interrupt_after(monkeypatch, n: int) -> None:
+    calls = {"n": 0}
+    original = KoolioEnv.simulate
+
+    def transition(self, action):
+        calls["n"] += 1
+        if calls["n"] > n:
+            raise KeyboardInterrupt
+        return original(self, action)
+
+    monkeypatch.setattr(KoolioEnv, "simulate", transition)
+
+
+def test_ctrl_c_folds_unfinished_episode(tmp_path, monkeypatch) -> None:
+    q, log, _ = run(tmp_path, "x", 2)
+    after_two = load_qtable(q)
+    _interrupt_after(monkeypatch, 25)
+    _, _, res = run(tmp_path, "x", 5)
+    assert res.interrupted
+    folded = load_qtable(q)
+    assert folded.rows != after_two.rows  # the partial episode's updates were saved
+    assert folded.meta["episodes"] == 2  # ...but it is not counted as finished
+    last = list(csv.DictReader(log.open()))[-1]
+    assert last["outcome"] == "interrupted" and last["episode"] == "2"
+
+
+def test_discard_unfinished_leaves_file_byte_identical(tmp_path, monkeypatch) -> None:
+    q, log, _ = run(tmp_path, "y", 2)
+    before = q.read_bytes()
+    log_before = log.read_bytes()
+    _interrupt_after(monkeypatch, 25)
+    _, _, res = run(tmp_path, "y", 5, discard_unfinished=True)
+    assert res.interrupted
+    assert q.read_bytes() == before
+    assert log.read_bytes() == log_before
+
+
+def test_evaluate_is_greedy_and_does_not_learn(tmp_path) -> None:
+    q, _, _ = run(tmp_path, "e", 4)
+    table = load_qtable(q)
+    rows = {k: list(v) for k, v in table.rows.items()}
+    env = small_env()
+    a = evaluate(env, table, 3, seed=0)
+    b = evaluate(env, table, 3, seed=0)
+    assert a == b
+    assert table.rows == rows
+    assert a.goal_rate + a.end_of_world_rate + a.truncated_rate == pytest.approx(1.0)

@@ -1,0 +1,156 @@
+"""Log rows read back: ASCII numbers only, bounded lines; a torn last row, however hostile,
+is moved to ``<log>.removed`` by a writer and left out by a reader; a complete malformed
+row is one line naming it, in ``train``, ``view`` and ``plot`` alike (issue #21)."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import pytest
+from inputs import expect_error
+
+from koolio_pymunk.apps import cli
+from koolio_pymunk.store.episode_log import LogWriter, ascii_float, ascii_int, log_rows
+from koolio_pymunk.store.errors import KoolioError
+
+ENV = ["--arena", "room", "--config", "tiny.yaml"]
+FILES = ["--qtable", "q.qtable", "--log", "q.csv"]
+TRAIN = ["train", *ENV, "--episodes", "3", "--quiet", *FILES]  # a total: one more episode
+VIEW = ["view", *ENV, "--learn", "--steps", "2", *FILES]
+PLOT = ["plot", "--log", "q.csv", "--out", "c.png"]
+HUGE = "x" * 200_000
+
+
+@pytest.fixture
+def work(tiny_run, tmp_path, monkeypatch) -> Path:
+    shutil.copy(tiny_run / "q.qtable", tmp_path / "q.qtable")
+    shutil.copy(tiny_run / "log.csv", tmp_path / "q.csv")
+    shutil.copy(tiny_run / "tiny.yaml", tmp_path / "tiny.yaml")
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("SDL_VIDEODRIVER", "dummy")
+    return tmp_path
+
+
+def _append(work: Path, text: str) -> str:
+    with open(work / "q.csv", "a", encoding="utf-8") as fh:
+        fh.write(text)
+    return (work / "q.csv").read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize("torn", ["²,-5", "2" + HUGE, f"2,{HUGE}", '2,"-5', "\x00\x01"])
+@pytest.mark.parametrize("argv", [TRAIN, VIEW], ids=["train", "view"])
+def test_a_hostile_torn_row_is_moved_like_any_torn_row(work, capsys, argv, torn):
+    before = (work / "q.csv").read_text(encoding="utf-8")
+    _append(work, torn)
+    assert cli.main(argv) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("warning: q.csv: moved 1 row"), err
+    assert (work / "q.csv").read_text(encoding="utf-8").startswith(before)
+    removed = (work / "q.csv.removed").read_text(encoding="utf-8").split("\n")
+    assert removed[1] == torn  # nothing lost
+
+
+@pytest.mark.parametrize("torn", ["²,-5", f"2,{HUGE}"])
+def test_plot_leaves_a_torn_row_out(work, capsys, torn):
+    _append(work, torn)
+    assert cli.main(PLOT) == 0
+    assert "plot: 2 episodes" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("row", "words"),
+    [
+        ("²,-5,3,0,goal,0,0.1,201", "line 4: episode: not an integer >= 0 in digits 0-9: '²'"),
+        ("١٢,-5,3,0,goal,0,0.1,201", "episode: not an integer"),
+        ("2,-5,3,0,goal,0,0.1,201" + HUGE, "line 4: 200,023 characters (a log line has at most"),
+        (f"2,-5,3,0,goal,0,0.1,{HUGE}", "line 4: 200,020 characters"),
+        ("2,nan,3,0,goal,0,0.1,201", "line 4: reward: not a finite decimal number: 'nan'"),
+        ("2,1e999,3,0,goal,0,0.1,201", "reward: not a finite decimal number"),
+        ("2,-5, 3,0,goal,0,0.1,201", "steps: not an integer >= 0"),
+        ("2,-5,3,1_0,goal,0,0.1,201", "bumps: not an integer >= 0"),
+        ("2,-5,3,0,goal,yes,0.1,201", "rescued: not 0 or 1"),
+    ],
+)
+@pytest.mark.parametrize("argv", [TRAIN, VIEW], ids=["train", "view"])
+def test_a_complete_malformed_row_is_one_line(work, capsys, argv, row, words):
+    _append(work, row + "\n")
+    expect_error(capsys, work, argv, "q.csv: ", words)
+
+
+@pytest.mark.parametrize(
+    ("row", "words"),
+    [
+        ("²,-5,3,0,goal,0,0.1,201", "line 4: episode: not a number: '²'"),
+        ("2,٣,3,0,goal,0,0.1,201", "reward: not a number"),
+        (f"2,-5,3,0,goal,0,0.1,{HUGE}", "line 4: 200,020 characters"),
+    ],
+)
+def test_plot_refuses_a_complete_malformed_row(work, capsys, row, words):
+    _append(work, row + "\n")
+    expect_error(capsys, work, PLOT, "q.csv: ", words)
+
+
+def test_log_rows_checks_every_complete_row(work):
+    _append(work, "2,-5,3,0,goal,0,0.1,201\n3,-1")
+    rows = log_rows(work / "q.csv")
+    assert [r["episode"] for r in rows] == ["0", "1", "2"]  # the torn row left out
+    _append(work, ",3,0,goal,0,0.1²,201\n")
+    with pytest.raises(KoolioError, match=r"q\.csv: line 5: epsilon: not a finite decimal"):
+        log_rows(work / "q.csv")
+
+
+def test_a_writer_refuses_before_it_writes(work):
+    text = _append(work, "2,-5,3,0,goal,0,0.1,201\n³,-5,3,0,goal,0,0.1,201\n")
+    with pytest.raises(KoolioError, match=r"q\.csv: line 5: episode"):
+        LogWriter(work / "q.csv", episodes=9, table=work / "q.qtable")
+    assert (work / "q.csv").read_text(encoding="utf-8") == text
+    assert not (work / "q.csv.removed").exists()
+
+
+def test_ascii_numbers():
+    assert [ascii_int(t) for t in ("0", "17", "9" * 18)] == [0, 17, 10**18 - 1]
+    assert [ascii_int(t) for t in ("9" * 19, "", "+1", "1.0", "٣", "1 ")] == [None] * 6
+    assert [ascii_float(t) for t in ("-0.5", "1e-05", ".5", "3.", "+2")] == [
+        -0.5,
+        1e-05,
+        0.5,
+        3.0,
+        2.0,
+    ]
+    bad = ("inf", "-inf", "NaN", "1e400", "1_000.5", "٣.٥", " 1", "0x10", "1e", "")
+    assert [ascii_float(t) for t in bad] == [None] * len(bad)
+
+
+def test_a_goal_name_is_bounded_as_log_fields_are(tmp_path):
+    """A goal's name goes into every row: a name longer than a log line could hold is
+    refused where the arena is read."""
+    from koolio_pymunk.world.arena import MAX_NAME_CHARS, ArenaError, load_arena
+
+    root = Path(__file__).resolve().parents[2]
+    text = (root / "arenas" / "room.yaml").read_text(encoding="utf-8")
+    name = load_arena("room").goals[0].name
+    long = tmp_path / "long.yaml"
+    long.write_text(text.replace(f"name: '{name}'", f"name: '{'g' * (MAX_NAME_CHARS + 1)}'"))
+    assert long.read_text() != text
+    with pytest.raises(ArenaError, match=r"name: 201 characters \(a name has at most 200\)"):
+        load_arena(long)
+
+
+def test_a_malformed_row_is_refused_before_the_table_is_read(work, capsys):
+    """One line, not a warning about the table's backup and then the line: the writer's
+    rows are checked with its header, before the table is read."""
+    data = (work / "q.qtable").read_bytes()
+    (work / "q.qtable").write_bytes(data[: len(data) // 2])  # torn: its backup would be used
+    _append(work, "2,-5,3,0,goal,0,0.1,201\n²,-5,3,0,goal,0,0.1,201\n")
+    expect_error(capsys, work, TRAIN, "q.csv: line 5: episode: not an integer")
+
+
+def test_a_log_that_cannot_take_its_first_row_is_refused_before_anything(work, capsys):
+    """Found by the fuzzer: a log that is a link to a missing file (or in a folder that
+    cannot be made) failed at its first row, after the table was saved: out of step."""
+    (work / "n.csv").symlink_to("nowhere/at/all")
+    argv = [*TRAIN[:-4], "--qtable", "q.qtable", "--log", "n.csv"]
+    expect_error(capsys, work, argv, "n.csv: is a link to a missing file (nowhere/at/all)")
+    argv[-1] = "tiny.yaml/n.csv"
+    expect_error(capsys, work, argv, "cannot create the folder tiny.yaml: a file is in the way")

@@ -1,0 +1,117 @@
+"""Ctrl-C twice (issue #21): a second Ctrl-C while the first is handled never ends in a
+KeyboardInterrupt traceback; the table and the log stay in step, one line at most is
+said, and the exit status is 130."""
+
+from __future__ import annotations
+
+import csv
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from koolio_pymunk.learning.qtable import load_qtable
+from koolio_pymunk.store import interrupts
+from koolio_pymunk.store.interrupts import SafeInterrupt, deferred
+
+ROOT = Path(__file__).resolve().parents[2]
+pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+
+
+def ctrl_c() -> None:
+    os.kill(os.getpid(), signal.SIGINT)
+    time.sleep(0.01)  # the handler runs at the next bytecode boundary
+
+
+def test_a_second_ctrl_c_is_ignored_while_the_first_is_handled():
+    with SafeInterrupt() as guard:
+        ctrl_c()
+        assert guard.pending
+        ctrl_c()  # within the grace: ignored, the first stays pending
+        assert guard.pending and guard.ignored == 1
+        with pytest.raises(KeyboardInterrupt):
+            guard.check()
+        for _ in range(3):  # being handled: every further Ctrl-C is ignored
+            ctrl_c()
+        assert guard.taken and guard.ignored == 4 and not guard.pending
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_a_second_ctrl_c_after_the_grace_interrupts_a_stuck_step(monkeypatch):
+    monkeypatch.setattr(interrupts, "GRACE_SECONDS", 0.0)
+    with SafeInterrupt() as guard:
+        ctrl_c()
+        with pytest.raises(KeyboardInterrupt):
+            ctrl_c()  # the loop never checked: a stuck step
+        ctrl_c()  # then it is being handled
+        assert guard.taken and guard.ignored == 1
+
+
+def test_deferred_runs_the_block_whole_then_interrupts():
+    done = []
+    with pytest.raises(KeyboardInterrupt), deferred():
+        ctrl_c()
+        ctrl_c()
+        done.append("saved")
+    assert done == ["saved"]
+    with deferred():
+        done.append("quiet")
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_raise_once_ignores_ctrl_c_from_then_on():
+    old = signal.signal(signal.SIGINT, interrupts.raise_once)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            ctrl_c()
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+        ctrl_c()  # ignored
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+def _in_step(folder: Path) -> None:
+    """The log holds each of the table's episodes once, in order (interrupted rows aside)."""
+    with open(folder / "q.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    done = [int(r["episode"]) for r in rows if r["outcome"] != "interrupted"]
+    assert done == list(range(load_qtable(folder / "q.qtable").meta["episodes"]))
+
+
+@pytest.mark.parametrize(
+    ("command", "gaps"),
+    [
+        ("train", (0.0, 0.002, 0.002, 0.03)),
+        ("view", (0.0, 0.01)),
+    ],
+)
+def test_ctrl_c_twice_in_a_real_process(tmp_path, command, gaps):
+    (tmp_path / "tiny.yaml").write_text("episode: {max_steps: 60}\n")
+    argv = [sys.executable, "-m", "koolio_pymunk", command, "--arena", "room"]
+    argv += ["--config", "tiny.yaml", "--qtable", "q.qtable", "--log", "q.csv"]
+    argv += ["--episodes", "100000"] if command == "train" else ["--steps", "10000000"]
+    env = {**os.environ, "SDL_VIDEODRIVER": "dummy", "PYTHONPATH": str(ROOT)}
+    p = subprocess.Popen(
+        argv, cwd=tmp_path, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
+    )
+    try:
+        deadline = time.time() + 120
+        log = tmp_path / "q.csv"
+        while time.time() < deadline and not (log.exists() and log.stat().st_size > 200):
+            time.sleep(0.02)
+        assert p.poll() is None, p.communicate()[1]
+        p.send_signal(signal.SIGINT)
+        for gap in gaps:
+            time.sleep(gap)
+            p.send_signal(signal.SIGINT)
+        err = p.communicate(timeout=120)[1].decode()
+    finally:
+        if p.poll() is None:
+            p.kill()
+    assert p.returncode == 130, err
+    assert "Traceback" not in err and len(err.strip().splitlines()) <= 1, err
+    _in_step(tmp_path)

@@ -1,0 +1,63 @@
+"""Configuration profiles (``--config NAME``) and worlds (``--world NAME|FILE``)."""
+
+from __future__ import annotations
+
+import pytest
+
+from koolio_pymunk.apps.cli import main
+from koolio_pymunk.store.config import Config, apply_world, load_config, profile_names
+from koolio_pymunk.store.errors import ConfigError
+from koolio_pymunk.task.env import KoolioEnv
+
+
+def test_paper_profile_loads_by_name() -> None:
+    assert "paper" in profile_names()
+    cfg = load_config("paper")
+    assert cfg.sensors.camera.camera_sensors_deg == [0.0, 90.0, -90.0]
+    assert cfg.learner.epsilon.at(0) == cfg.learner.epsilon.at(10_000)  # a fixed epsilon
+
+
+def test_unknown_profile_is_one_line_error() -> None:
+    with pytest.raises(ConfigError, match=r"^papr: no such profile \(did you mean 'paper'\?\)"):
+        load_config("papr")
+
+
+def test_world_sets_only_world_sections(tmp_path) -> None:
+    world = tmp_path / "w.yaml"
+    world.write_text("sensors: {noise: {scale: 0.5}}\n")
+    cfg = apply_world(Config(), world)
+    assert cfg.sensors.noise.scale == 0.5
+    world.write_text("learner: {alpha: 0.5}\n")
+    with pytest.raises(ConfigError, match=r"w\.yaml: learner: not a world setting"):
+        apply_world(Config(), world)
+    world.write_text("sensors: {sonar: {max_range: 100}}\n")
+    with pytest.raises(ConfigError, match=r"w\.yaml: sensors\.sonar: not a world setting"):
+        apply_world(Config(), world)
+    with pytest.raises(ConfigError, match=r"paper: sensors\.camera: not a world setting"):
+        apply_world(Config(), "paper")
+
+
+def test_world_applies_to_a_copy_and_env_names_it(tmp_path) -> None:
+    world = tmp_path / "w.yaml"
+    world.write_text("sensors: {noise: {model: none}}\n")
+    cfg = Config()
+    env = KoolioEnv("room", config=cfg, world=world)
+    assert env.config.sensors.noise.model == "none"
+    assert cfg.sensors.noise.model == "uniform"
+    assert env.world_name == str(world)
+    assert KoolioEnv("room").world_name == "ideal"
+
+
+def test_cli_world_flag_and_profile(tmp_path, capsys) -> None:
+    world = tmp_path / "w.yaml"
+    world.write_text("learner: {alpha: 0.5}\n")
+    args = ["train", "--arena", "room", "--episodes", "1", "--quiet"]
+    args += ["--qtable", str(tmp_path / "t.qtable"), "--log", str(tmp_path / "t.csv")]
+    assert main([*args, "--world", str(world)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [
+        f"koolio-pm: error: {world}: learner: not a world setting "
+        "(a world sets only: realism, sensors.noise)"
+    ]
+    assert not (tmp_path / "t.qtable").exists()
+    assert main([*args, "--config", "paper"]) == 0

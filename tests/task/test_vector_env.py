@@ -1,0 +1,159 @@
+"""Gymnasium vector environments and render_mode="rgb_array"."""
+
+from __future__ import annotations
+
+import math
+import os
+
+os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
+
+import gymnasium as gym
+import numpy as np
+
+import koolio_pymunk  # noqa: F401  (registers koolio_pymunk/Hallway-v0)
+from koolio_pymunk.task.rules import TERMS
+
+ENV_ID = "koolio_pymunk/Hallway-v0"
+ACTIONS = [3, 1, 3, 3, 2, 4, 0, 3]
+
+
+def _single_run(seed: int, max_steps: int) -> list[np.ndarray]:
+    env = gym.make(ENV_ID, max_steps=max_steps)
+    obs, _ = env.reset(seed=seed)
+    out = [obs]
+    for a in ACTIONS[:max_steps]:
+        obs, *_ = env.step(a)
+        out.append(obs)
+    env.close()
+    return out
+
+
+def _vector_run(mode: str, seeds: list[int], max_steps: int) -> list[np.ndarray]:
+    venv = gym.make_vec(ENV_ID, num_envs=len(seeds), vectorization_mode=mode, max_steps=max_steps)
+    try:
+        obs, _ = venv.reset(seed=seeds)
+        out = [obs]
+        for a in ACTIONS[:max_steps]:
+            obs, *_ = venv.step(np.full(len(seeds), a))
+            out.append(obs)
+        return out
+    finally:
+        venv.close()
+
+
+def test_sync_and_async_vector_envs_match_single_envs():
+    seeds = [3, 4]
+    singles = [_single_run(s, 6) for s in seeds]
+    expected = [np.stack([singles[0][t], singles[1][t]]) for t in range(7)]
+    for mode in ("sync", "async"):
+        got = _vector_run(mode, seeds, 6)
+        assert len(got) == 7
+        for t in range(7):
+            assert got[t].shape == (2, 12) and got[t].dtype == np.int64
+            np.testing.assert_array_equal(got[t], expected[t])
+    assert not np.array_equal(expected[0][0], expected[0][1]) or not np.array_equal(
+        expected[6][0], expected[6][1]
+    )
+
+
+def test_vector_env_truncates_and_autoresets_with_goal_kwarg():
+    venv = gym.make_vec(ENV_ID, num_envs=2, vectorization_mode="sync", max_steps=3, goal="302")
+    try:
+        assert venv.single_action_space == gym.spaces.Discrete(5)
+        venv.reset(seed=[0, 1])
+        for step in range(1, 4):
+            _, reward, term, trunc, info = venv.step(np.array([1, 2]))
+            assert reward.shape == (2,) and not term.any()
+            assert list(info["steps"]) == [step, step]
+        assert trunc.all()
+        assert list(info["goal"]) == ["302", "302"]
+        _, reward, _, trunc, info = venv.step(np.array([1, 2]))  # next-step autoreset
+        assert list(info["steps"]) == [0, 0] and list(reward) == [0.0, 0.0]
+        assert not trunc.any()
+    finally:
+        venv.close()
+
+
+# Staggered episodes: every env faces the near end of the hallway; env 0 drives into the
+# end-of-world zone (terminated at step 7) while the others turn or dither until the step
+# cap of 9, so env 0 autoresets while the others are in mid-episode, then at step 10 the
+# others autoreset while env 0 is in its second episode.
+STAGGER_SEEDS = [5, 6, 7, 8]
+STAGGER_CAP = 9
+STAGGER_STEPS = 14
+
+
+def _stagger_action(env: int, t: int) -> int:
+    return [3, 1, 2, 3 if t % 2 else 4][env]
+
+
+def _single_with_autoreset(seed: int, env: int) -> list[tuple]:
+    """What one env of the vector does: Gymnasium's next-step autoreset by hand."""
+    single = gym.make(ENV_ID, max_steps=STAGGER_CAP)
+    obs, info = single.reset(seed=seed, options={"heading": math.pi})
+    out, done = [], False
+    for t in range(STAGGER_STEPS):
+        if done:
+            obs, info = single.reset()
+            reward, term, trunc = 0.0, False, False
+        else:
+            obs, reward, term, trunc, info = single.step(_stagger_action(env, t))
+        done = term or trunc
+        out.append((obs, reward, term, trunc, info["keyword"], info["event"], info["steps"]))
+    single.close()
+    return out
+
+
+def test_vector_envs_survive_staggered_autoresets():
+    expected = [_single_with_autoreset(s, i) for i, s in enumerate(STAGGER_SEEDS)]
+    for mode in ("sync", "async"):
+        venv = gym.make_vec(ENV_ID, num_envs=4, vectorization_mode=mode, max_steps=STAGGER_CAP)
+        try:
+            venv.reset(seed=STAGGER_SEEDS, options={"heading": math.pi})
+            resets_at = []
+            for t in range(STAGGER_STEPS):
+                actions = np.array([_stagger_action(i, t) for i in range(4)])
+                obs, reward, term, trunc, info = venv.step(actions)
+                assert info["keyword"].dtype == np.int64 and info["steps"].dtype == np.int64
+                assert all(isinstance(e, str) for e in info["event"])
+                assert all(isinstance(p, tuple) and len(p) == 3 for p in info["pose"])
+                terms = {k for k in info["reward_terms"] if not k.startswith("_")}
+                assert terms == set(TERMS)
+                assert all(info["reward_terms"][k].dtype == np.float64 for k in terms)
+                resets_at.append([i for i in range(4) if info["event"][i] == "reset"])
+                for i in range(4):
+                    e_obs, e_reward, e_term, e_trunc, e_key, e_event, e_steps = expected[i][t]
+                    np.testing.assert_array_equal(obs[i], e_obs)
+                    assert (reward[i], term[i], trunc[i]) == (e_reward, e_term, e_trunc)
+                    assert (info["keyword"][i], info["event"][i]) == (e_key, e_event)
+                    assert info["steps"][i] == e_steps
+                    if e_event == "reset":
+                        assert e_key == -1 and e_steps == 0
+            assert resets_at[7] == [0] and resets_at[9] == [1, 2, 3], (mode, resets_at)
+        finally:
+            venv.close()
+
+
+def test_rgb_array_render_returns_the_viewers_picture():
+    env = gym.make(ENV_ID, render_mode="rgb_array")
+    try:
+        env.reset(seed=0, options={"heading": 0.0})
+        first = env.render()
+        assert isinstance(first, np.ndarray)
+        assert first.dtype == np.uint8 and first.ndim == 3 and first.shape[2] == 3
+        assert first.shape[1] >= 600 and first.shape[0] >= 100
+        assert len(np.unique(first.reshape(-1, 3), axis=0)) > 8  # walls, robot, sensors, text
+        for _ in range(3):
+            env.step(3)
+        second = env.render()
+        assert second.shape == first.shape and not np.array_equal(first, second)
+    finally:
+        env.close()
+    venv = gym.make_vec(ENV_ID, num_envs=2, vectorization_mode="sync", render_mode="rgb_array")
+    try:
+        venv.reset(seed=[0, 1])
+        frames = venv.render()
+        assert len(frames) == 2 and all(f.shape == first.shape for f in frames)
+    finally:
+        venv.close()
