@@ -34,7 +34,7 @@ def header_for(doors: str) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     """Build the hallway, save it atomically, and check that the result loads."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0], allow_abbrev=False)
     parser.add_argument("--doors", default="arenas/hallway_doors.yaml", help="door table")
     parser.add_argument("--out", default="arenas/hallway.yaml", help="arena file to write")
     args = parser.parse_args(argv)

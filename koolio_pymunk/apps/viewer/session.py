@@ -154,8 +154,9 @@ class Session:
         self.done = self.last is not None and self.episode >= self.last
         self.closed = False
         self._pending_reset = True
-        if not self.done:
-            self._begin()
+        # The next episode's start is shown even when there is nothing to run (``view
+        # --episodes 0``): an env that was never reset has no reading to draw.
+        self._begin()
 
     # -- stepping ------------------------------------------------------------------------
     def _begin(self) -> None:

@@ -346,6 +346,21 @@ def test_view_learns_exactly_like_train_and_writes_a_screenshot(tmp_path, config
     assert "3 episodes finished" in capsys.readouterr().out
 
 
+def test_view_with_no_episode_to_run_shows_the_start(tmp_path, config) -> None:
+    """``--episodes 0`` draws the next episode's start (it once drew uninitialised
+    readings and crashed) and changes no file."""
+    argv = ["--arena", "room", "--config", str(config), "--seed", "2"]
+    table = tmp_path / "q.qtable"
+    assert main(["train", *argv, "--qtable", str(table), "--episodes", "1", "--quiet"]) == 0
+    before = table.read_bytes()
+    for mode in ([], ["--learn"]):
+        shot = tmp_path / f"shot{len(mode)}.png"
+        view = ["view", *argv, *mode, "--qtable", str(table), "--episodes", "0"]
+        assert main([*view, "--screenshot", str(shot)]) == 0
+        assert pygame.image.load(str(shot)).get_size()[0] > 0
+        assert table.read_bytes() == before
+
+
 def test_train_resumes_a_table_from_the_window(tmp_path, config) -> None:
     """Hand a table from the window to ``train``: 2 + 1 episodes == 3 in one go."""
     argv = ["--arena", "room", "--config", str(config), "--seed", "2"]
