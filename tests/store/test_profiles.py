@@ -5,7 +5,13 @@ from __future__ import annotations
 import pytest
 
 from koolio_pymunk.apps.cli import main
-from koolio_pymunk.store.config import Config, apply_world, load_config, profile_names
+from koolio_pymunk.store.config import (
+    Config,
+    apply_world,
+    load_config,
+    profile_names,
+    state_fields,
+)
 from koolio_pymunk.store.errors import ConfigError
 from koolio_pymunk.task.env import KoolioEnv
 
@@ -15,6 +21,16 @@ def test_paper_profile_loads_by_name() -> None:
     cfg = load_config("paper")
     assert cfg.sensors.camera.camera_sensors_deg == [0.0, 90.0, -90.0]
     assert cfg.learner.epsilon.at(0) == cfg.learner.epsilon.at(10_000)  # a fixed epsilon
+
+
+def test_paper_memory_profile_is_the_paper_plus_memory() -> None:
+    """``paper-memory`` differs from ``paper`` in ``sensors.memory`` only."""
+    paper, mem = load_config("paper"), load_config("paper-memory")
+    assert mem.sensors.memory.goal_camera and mem.sensors.memory.previous_action
+    assert not (mem.sensors.memory.eow_camera or mem.sensors.memory.forget_after)
+    assert [name for name, _ in state_fields(mem.sensors)][-2:] == ["GoalMemory", "LastAction"]
+    mem.sensors.memory = paper.sensors.memory
+    assert mem == paper
 
 
 def test_unknown_profile_is_one_line_error() -> None:
