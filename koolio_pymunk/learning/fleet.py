@@ -71,6 +71,7 @@ import pymunk.batch
 
 from ..sensing.encoding_kernel import readout, readout_batch
 from ..sensing.ray_kernel import new_trig, sense_batch, sense_one
+from ..sensing.sensor_arrays import GEOMETRY, bundle
 from ..store.errors import ConfigError, KoolioError, located
 from ..store.interrupts import SafeInterrupt
 from ..store.realism_config import realism_on
@@ -172,70 +173,30 @@ class Fleet:
         self.flags = np.empty((n, 2), np.bool_)
         self.walls = wall_array(world)  # any backend: the kernel reads robot 0's copy
         self.trig = new_trig(self.k.ray_offsets.size, n)
-
-    def _args(self) -> tuple:
-        k = self.k
-        return (
-            k.fracs,
-            self.suite.n_sonar,
-            k.limits,
-            self.suite.sonar_thresholds,
-            self.suite.camera_thresholds,
-            k.group_members,
-            k.group_sizes,
-            k.bits,
-            k.compass_in_state,
-        )
+        self.geometry = bundle(GEOMETRY, self.k, walls=self.walls)
+        """The sensing kernel's geometry group, with this world's walls."""
 
     def sense_all(
         self, xy: np.ndarray, headings: list[float], draws: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
         """State key of every robot, and their Bump and goal-close flags (``N x 2``)."""
         k = self.k
-        sense_batch(
-            np.ascontiguousarray(xy[:, 0]),
-            np.ascontiguousarray(xy[:, 1]),
-            np.asarray(headings, dtype=np.float64),
-            k.ray_offsets,
-            k.params,
-            k.camera_dirs,
-            self.goals,
-            k.markers,
-            self.walls,
-            self.raw,
-            self.rays,
-            self.eow_k,
-            self.trig,
-        )
-        readout_batch(
-            self.raw, draws, *self._args(), self.out, self.eow_k, self.codes, self.keys, self.flags
-        )
+        xs, ys = np.ascontiguousarray(xy[:, 0]), np.ascontiguousarray(xy[:, 1])
+        hs = np.asarray(headings, dtype=np.float64)
+        sense_batch(xs, ys, hs, self.geometry, self.goals, self.raw, self.rays, self.eow_k,
+                    self.trig)  # fmt: skip
+        readout_batch(self.raw, draws, k.encoding, self.out, self.eow_k, self.codes, self.keys,
+                      self.flags)  # fmt: skip
         return self.keys, self.flags
 
     def sense_one(self, r: int, rng: np.random.Generator) -> tuple[int, bool, bool]:
         """Robot ``r`` alone (after a reset or a rescue), noise from ``rng``."""
         k = self.k
         x, y, h = self.world.pose(r)
-        sense_one(
-            x,
-            y,
-            h,
-            k.ray_offsets,
-            k.params,
-            k.camera_dirs,
-            self.goals[r],
-            k.markers,
-            self.walls,
-            self.raw[r],
-            self.rays[r],
-            self.eow_k[r],
-            self.trig[r],
-            k.plates,
-            k.ray_cos,
-            k.decoy,
-        )
+        buffers = (self.raw[r], self.rays[r], self.eow_k[r], self.trig[r], k.ray_cos, k.decoy)
+        sense_one(x, y, h, self.geometry, self.goals[r], k.plates, buffers)
         draws = self.suite.draw_noise(rng, k.n_raw)
-        return readout(self.raw[r], draws, *self._args(), self.out[r], self.eow_k[r], self.codes[r])
+        return readout(self.raw[r], draws, k.encoding, self.out[r], self.eow_k[r], self.codes[r])
 
 
 class _Episode:
@@ -498,14 +459,14 @@ class _Run:
         xy = self.xy = self.poses.xy()
         keys, flags = self.fleet.sense_all(xy, world.heading, draws)
         lc = self.cfg.learner
+        tick = (self.active, self.actions, self.state, keys, flags[:, 0], flags[:, 1], xy)
+        rules = (self.reward, lc.alpha, lc.gamma, self.zones, self.rescue_after,
+                 self.cfg.episode.max_steps)  # fmt: skip
+        counters = (self.steps, self.bumps, self.total, self.event)
+        table = sh.args()
         r = 0
         while r < n:
-            r, why = learn(
-                r, self.active, self.actions, self.state, keys, flags[:, 0], flags[:, 1], xy,
-                self.reward, lc.alpha, lc.gamma, self.zones, self.rescue_after,
-                self.cfg.episode.max_steps, self.steps, self.bumps, self.total, self.event,
-                *self.journal, *sh.args(),
-            )  # fmt: skip
+            r, why = learn(r, tick, rules, counters, self.journal, sh.index, table)
             if why == RESCUE_DRAW:
                 self._rescue_step(r, int(keys[r]))
             elif why == TERMINAL:
@@ -537,9 +498,9 @@ class _Run:
         assert ep is not None
         lc = self.cfg.learner
         code = int(self.event[r])
-        update_logged(*self.shared.args(), lc.alpha, lc.gamma, int(self.state[r]),
+        update_logged(self.shared.index, self.shared.args(), lc.alpha, lc.gamma, int(self.state[r]),
                       int(self.actions[r]), float(self.reward[code]), nxt, False, r,
-                      *self.journal)  # fmt: skip
+                      self.journal)  # fmt: skip
         if ep.rng.random() < self.cfg.rescue.rescue_chance:
             rescue_robot(self.world, r, self.cfg.rescue, self.env.move_distance, ep.rng)
             self.xy[r] = self.world.pose(r)[:2]

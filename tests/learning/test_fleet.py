@@ -177,7 +177,7 @@ def test_update_and_choose_match_the_learner() -> None:
         reward, terminal = float(rng.normal()), bool(rng.random() < 0.2)
         agent.update(s, a, reward, nxt, terminal)
         shared.reserve(2)
-        update(*shared.args(), 0.3, 0.9, s, a, reward, nxt, terminal)
+        update(shared.index, shared.args(), 0.3, 0.9, s, a, reward, nxt, terminal)
     ref.row(3)[:] = [1.0, 2.0, 2.0, 0.0, 2.0]  # a three-way tie
     shared.sync()
     shared.table.rows[3] = [1.0, 2.0, 2.0, 0.0, 2.0]
@@ -229,10 +229,18 @@ def test_learn_judges_like_the_rules(goal_close: bool, eow: bool, bump: bool) ->
         xy = np.array([inside if eow else (100.0, 100.0)])
         steps, bumps, total, event = (np.zeros(1, np.int64), np.zeros(1, np.int64),
                                       np.zeros(1), np.zeros(1, np.int64))  # fmt: skip
-        r, why = learn(0, np.ones(1, np.bool_), np.array([action]), np.zeros(1, np.int64),
-                       np.ones(1, np.int64), np.array([bump]), np.array([goal_close]), xy,
-                       reward, 0.5, 0.9, zone_arrays(zones), -1, 0, steps, bumps, total,
-                       event, *new_journal(1, 0), *shared.args())  # fmt: skip
+        tick = (
+            np.ones(1, np.bool_),
+            np.array([action]),
+            np.zeros(1, np.int64),
+            np.ones(1, np.int64),
+            np.array([bump]),
+            np.array([goal_close]),
+            xy,
+        )
+        rules = (reward, 0.5, 0.9, zone_arrays(zones), -1, 0)
+        r, why = learn(0, tick, rules, (steps, bumps, total, event), new_journal(1, 0),
+                       shared.index, shared.args())  # fmt: skip
         assert EVENTS[event[0]] == j.event and total[0] == j.reward
         assert (why == 2) == j.terminated and (r, steps[0], bumps[0]) == (
             0 if j.terminated else 1,
