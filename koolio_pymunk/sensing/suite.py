@@ -304,6 +304,11 @@ class SensorSuite:
             self._last = self.kernel.last_readings()
         return self._last
 
+    def forget_last(self) -> None:
+        """The compiled kernel's buffers hold a newer reading than :meth:`last` built
+        (read elsewhere with this suite's kernel inputs): build it again when asked."""
+        self._last = None
+
     def encode(self, r: Readings) -> tuple[int, ...]:
         """The state: codes in keyword order (Tables 6, 7 and 12)."""
         goal = np.searchsorted(self.camera_thresholds, r.goal, side="right")
