@@ -25,6 +25,8 @@ peek, QLearner.update, rules.judge, EndZones.contains, geometry.locate_point);
 
 from __future__ import annotations
 
+import math
+
 import numba
 import numpy as np
 from numba import types
@@ -34,8 +36,9 @@ from ..store.config import RewardConfig
 from ..task.end_zones import EndZones
 from ..task.rules import ACTION_TERMS, TERMINAL_EVENTS, TERMS
 from ..world.geometry import EPS
-from ..world.physics import Action
+from ..world.physics import TWO_PI, Action
 from ..world.segment_query import hypot
+from ..world.swept_move import sweep
 from .qtable import QTable
 
 #: :func:`learn`'s reasons to stop at a robot.
@@ -242,6 +245,35 @@ def choose(
                     actions[r] = a
                     break
                 pick -= 1
+
+
+@numba.njit(cache=True)
+def move_all(
+    actions: np.ndarray, copy_xy: np.ndarray, headings: np.ndarray, walls: np.ndarray,
+    offsets: np.ndarray, motion: tuple, xy: np.ndarray,
+) -> None:  # fmt: skip
+    """``World.act`` for every robot, compiled: rotations turn ``headings``, Forward and
+    Reverse are :func:`~koolio_pymunk.world.swept_move.sweep` of robot ``r`` from
+    ``copy_xy[r]`` (its body's position in its copy of the arena) against ``walls[r]``
+    (its copy's walls, ``wall_array(world, r)``), as the pymunk world computes them;
+    ``xy[r]`` = the position in the arena's coordinates (``PoseReader.xy``).
+    ``motion`` = ``(move distance, turn arc, radius)``."""
+    distance, arc, radius = motion
+    for r in range(actions.shape[0]):
+        a = actions[r]
+        if a == 1:
+            headings[r] = (headings[r] + arc) % TWO_PI
+        elif a == 2:
+            headings[r] = (headings[r] - arc) % TWO_PI
+        elif a == 3 or a == 4:
+            d = distance if a == 3 else -distance
+            h = headings[r]
+            x, y = sweep(walls[r], copy_xy[r, 0], copy_xy[r, 1], d * math.cos(h), d * math.sin(h),
+                         radius)  # fmt: skip
+            copy_xy[r, 0] = x
+            copy_xy[r, 1] = y
+        xy[r, 0] = copy_xy[r, 0] - offsets[r]
+        xy[r, 1] = copy_xy[r, 1]
 
 
 @numba.njit(cache=True)

@@ -247,3 +247,37 @@ def test_learn_judges_like_the_rules(goal_close: bool, eow: bool, bump: bool) ->
             1,
             bump,
         )
+
+
+@pytest.mark.parametrize("arena_name", ["obstacles", "room", "hallway"])
+def test_move_all_moves_every_robot_as_the_pymunk_world_does(arena_name) -> None:
+    """The fleet's compiled moves (each robot in its own copy of the walls) against
+    ``World.act`` on the same actions: positions in the copies, arena positions and
+    headings equal bit for bit, tick after tick."""
+    from koolio_pymunk.learning.fleet_kernel import move_all
+    from koolio_pymunk.world.segment_query import wall_array
+
+    arena = load_arena(arena_name)
+    n = 6
+    w = World.from_arena(arena, R, n_robots=n)
+    rng = np.random.default_rng(11)
+    for i in range(n):
+        w.place(i, arena.start.at, float(rng.uniform(0, 2 * math.pi)))
+    walls = np.stack([wall_array(w, k) for k in range(n)])
+    offsets = np.asarray(w.offsets, dtype=np.float64)
+    copy_xy = np.array([w.copy_position(k) for k in range(n)])
+    headings = np.array(w.heading)
+    xy = np.empty((n, 2))
+    contacts = 0
+    for _ in range(300):
+        actions = rng.integers(5, size=n)
+        actions[rng.random(n) < 0.5] = Action.FORWARD
+        before = copy_xy.copy()
+        w.act([int(a) for a in actions], 12.0, math.radians(30))
+        move_all(actions, copy_xy, headings, walls, offsets, (12.0, math.radians(30), R), xy)
+        for k in range(n):
+            assert tuple(copy_xy[k]) == w.copy_position(k)
+            assert (xy[k, 0], xy[k, 1], headings[k]) == w.pose(k)
+            moved = math.dist(before[k], copy_xy[k])
+            contacts += actions[k] in (Action.FORWARD, Action.REVERSE) and moved < 11.999
+    assert contacts > 20  # the premise: many moves met a wall
