@@ -272,10 +272,9 @@ def test_discard_takes_back_only_the_unfinished_writes():
     table.row(1)[:] = [0.0] * 5
     sh = SharedTable(table)
     journal = new_journal(2, 8)
-    args = (*sh.args(), 0.5, 0.0)
 
     def write(robot, state, action, reward):
-        update_logged(*args, state, action, reward, 0, True, robot, *journal)
+        update_logged(sh.index, sh.args(), 0.5, 0.0, state, action, reward, 0, True, robot, journal)
 
     write(0, 1, 0, 10.0)  # robot 0 (kept): 5.0
     write(1, 1, 0, 20.0)  # robot 1 (discarded) over it: 12.5

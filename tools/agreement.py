@@ -19,8 +19,14 @@ whose end positions differ in any bit (exit 1 if any), the moves that met a wall
 started touching one, and the smallest clearance to a wall after a move. ``--poses 0``
 skips the sensors.
 
+``--episodes N`` also trains ``N`` seeded episodes of the hallway in each world
+(``--worlds``) twice, the Python episode loop and the compiled episode
+(``koolio_pymunk.learning.episode_agreement``), and counts the episodes after which the
+log row, the pose, the state or the Q-table differ in any bit (exit 1 if any).
+
     .venv/bin/python tools/agreement.py --poses 100000 --out agreement.json
     .venv/bin/python tools/agreement.py --poses 0 --moves 100000
+    .venv/bin/python tools/agreement.py --poses 0 --episodes 3000
 
 About 1 ms per pose (the pymunk reference is most of it; 1 to 3 ms with koolio-real's
 models): 100k poses x 3 arenas take about 3 minutes per world on 2 cores. A move
@@ -69,6 +75,30 @@ def run_moves(moves: int, seed: int = 0, jobs: int = 2, generated: int = 4) -> l
     with ProcessPoolExecutor(max_workers=jobs) as pool:
         futures = [pool.submit(one_moves, a, moves, seed, generated) for a in arenas]
         return [f.result() for f in futures]
+
+
+def one_episodes(world: str, episodes: int, seed: int) -> dict:
+    from koolio_pymunk.learning.episode_agreement import compare_episodes
+
+    laid = None if world == IDEAL else world
+    return compare_episodes("hallway", laid, episodes, seed).as_dict()
+
+
+def run_episodes(episodes: int, seed: int, jobs: int, worlds: tuple[str, ...]) -> list[dict]:
+    """Compiled-episode agreement figures per world (a list of dicts)."""
+    with ProcessPoolExecutor(max_workers=jobs) as pool:
+        futures = [pool.submit(one_episodes, w, episodes, seed) for w in worlds]
+        return [f.result() for f in futures]
+
+
+def print_episodes(rows: list[dict]) -> None:
+    print("compiled episode vs the Python episode loop (rows, poses, tables, bit for bit):")
+    print(f"{'world':>12} {'episodes':>9} {'steps':>10} {'mismatches':>11} {'states':>7} {'s':>6}")
+    for r in rows:
+        print(
+            f"{r['world']:>12} {r['episodes']:>9} {r['steps']:>10} {r['mismatches']:>11} "
+            f"{r['states']:>7} {r['seconds']:>6}"
+        )
 
 
 def print_poses(rows: list[dict]) -> None:
@@ -134,20 +164,29 @@ def main(argv: list[str] | None = None) -> int:
     )
     p.add_argument("--moves", type=int, default=0, help="moves per arena, the motion (0)")
     p.add_argument("--generated", type=int, default=4, help="generated arenas for --moves (4)")
+    p.add_argument(
+        "--episodes", type=int, default=0, help="training episodes per world, the episode (0)"
+    )
     p.add_argument("--out", default=None, help="write the figures as JSON here")
     args = p.parse_args(argv)
-    rows, moves = [], []
+    rows, moves, episodes = [], [], []
     if args.poses:
         rows = run(args.poses, args.seed, args.jobs, args.noise, tuple(args.worlds))
         print_poses(rows)
     if args.moves:
         moves = run_moves(args.moves, args.seed, args.jobs, args.generated)
         print_moves(moves)
+    if args.episodes:
+        episodes = run_episodes(args.episodes, args.seed, args.jobs, tuple(args.worlds))
+        print_episodes(episodes)
     if args.out:
+        out: object = rows
+        if args.moves or args.episodes:
+            out = {"poses": rows, "moves": moves, "episodes": episodes}
         with open(args.out, "w", encoding="utf-8") as fh:
-            json.dump({"poses": rows, "moves": moves} if args.moves else rows, fh, indent=2)
+            json.dump(out, fh, indent=2)
     bad = sum(r["distance_mismatches"] + r["state_mismatches"] for r in rows)
-    bad += sum(r["mismatches"] for r in moves)
+    bad += sum(r["mismatches"] for r in moves) + sum(r["mismatches"] for r in episodes)
     return 1 if bad else 0
 
 

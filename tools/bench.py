@@ -3,27 +3,35 @@
 Sections (each printed as a table row, all written to ``--out`` as JSON):
 
 * **reference / fast**: the single-robot training loop (epsilon-greedy, Q update, same
-  code as ``koolio-pm train``) on the hallway with the pymunk reference sensors and with
-  the fast backend, without file I/O: steps per second, and the fast/reference ratio;
-* **koolio-real**: the same fast loop in the realistic world (``--world koolio-real``:
-  every realism model on), next to the ideal world's row above: steps per second and
-  the ratio to the ideal world;
-* **train (end to end)**: :func:`training.train` as ``koolio-pm train`` runs it, saving
-  the table (file + backup, fsynced) and the log at every episode end;
+  code as ``koolio-pm train``) on the hallway with the pymunk reference sensors (the
+  Python episode loop) and with the fast backend, without file I/O: the fast row is the
+  compiled episode (``learning/episode_kernel.py``, what ``train`` runs), the next row
+  the same fast backend in the Python episode loop, with the compiled/Python ratio;
+  steps per second, and the fast/reference ratio;
+* **koolio-real**: the same compiled loop in the realistic world (``--world
+  koolio-real``: every realism model on), next to the ideal world's row above: steps per
+  second and the ratio to the ideal world;
+* **train (end to end)**: :func:`training.train` as ``koolio-pm train`` runs it (the
+  compiled episode), saving the table (file + backup, fsynced) and the log at every
+  episode end, then with ``save_every`` 100 (``--save-every 100``);
 * **N robots**: :func:`multi.train_many` with ``--robots`` robots, robot-steps per second;
 * **motion**: the cost of one 12-inch move from the same seeded random free poses of the
   hallway (near a wall: within 12 in of one): the pymunk world's (``World.move``), the
   compiled move (``swept_move.move``) called from Python, and per move inside one
   compiled loop;
-* **algorithms**: the fast single-robot loop with each ``learner.algorithm`` (one-step Q,
-  Q(lambda), Dyna-Q with its default ``planning_steps``), the same number of steps from an
-  empty table in this one run: the cost per step and its ratio to one-step Q's;
+* **algorithms**: the fast single-robot loop with each ``learner.algorithm`` (one-step Q
+  compiled and in the Python loop, Q(lambda) and Dyna-Q with its default
+  ``planning_steps``, which run the Python loop), the same number of steps from an empty
+  table in this one run: the cost per step and its ratio to compiled one-step Q's;
 * **time to competence**, per seed: default ``koolio-pm train`` (hallway, default
   config), a greedy evaluation of 100 episodes after every ``--check-every`` episodes,
   until at least 90 % reach the goal; each seed runs in its own process, which also
   reports its own peak RSS (:func:`peak_rss_mib`) and its Q-table's size next to the
   paper's dense 113.9 MiB;
-* **profile**: cProfile of the fast single-robot loop, top 10 functions by own time;
+* **cost per step**: the compiled episode's step taken apart, each part timed in a
+  compiled loop over the same recorded poses (:func:`step_costs`);
+* **profile**: cProfile of the fast single-robot loop (compiled), top 10 functions by own
+  time;
 * **agreement**: fast vs reference sensing on a sample of random poses per arena
   (``tools/agreement.py`` runs the full 100k);
 * **arena check**: validating an arena whose walls are a 5,000-point ring, and a
@@ -89,9 +97,16 @@ def make_env(backend: str, arena: str = "hallway", world: str | None = None, alg
 
 
 def learning_loop(
-    backend: str, min_steps: int, seed: int = 0, world: str | None = None, algorithm: str = "q"
+    backend: str,
+    min_steps: int,
+    seed: int = 0,
+    world: str | None = None,
+    algorithm: str = "q",
+    compiled: bool = True,
 ) -> dict:
-    """The training loop of ``train`` without file I/O, for at least ``min_steps`` steps."""
+    """The training loop of ``train`` without file I/O, for at least ``min_steps`` steps
+    (``compiled`` False: the Python episode loop; True: the compiled episode where the
+    configuration allows, as ``train``)."""
     import numpy as np
 
     from koolio_pymunk.learning.algorithms import make_learner
@@ -103,7 +118,13 @@ def learning_loop(
     agent = make_learner(table, env.config.learner, np.random.default_rng(seed))
     env.reset(seed=0)
     env.transition(0)  # compile / warm up
-    loop = Episodes(env, agent, seed)
+    loop = Episodes(env, agent, seed, compiled=compiled)
+    if loop.compiled is not None:  # compile / warm up the episode kernel on a copy
+        warm = make_env(backend, world=world, algorithm=algorithm)
+        other = make_learner(QTable(warm.layout), warm.config.learner, None)
+        w = Episodes(warm, other, seed, compiled=True)
+        w.begin(0)
+        w.run()
     steps, e = 0, 0
     with Timer() as t:
         while steps < min_steps:
@@ -112,14 +133,17 @@ def learning_loop(
             e += 1
     out = rates(steps, t)
     out["episodes"] = e
+    out["compiled"] = loop.compiled is not None
     return out
 
 
 def algorithms(min_steps: int) -> dict:
-    """Each learning algorithm in the fast loop; cost per step and ratio to one-step Q."""
+    """Each learning algorithm in the fast loop; cost per step and ratio to one-step Q
+    (compiled; ``q-python``: one-step Q in the Python loop)."""
     out = {}
-    for name in ("q", "qlambda", "dyna"):
-        r = learning_loop("fast", min_steps, seed=0, algorithm=name)
+    for name in ("q", "q-python", "qlambda", "dyna"):
+        algo = name.removesuffix("-python")
+        r = learning_loop("fast", min_steps, seed=0, algorithm=algo, compiled=name == algo)
         r["us_per_step_cpu"] = round(1e6 * r["cpu_s"] / max(1, r["steps"]), 2)
         out[name] = r
     base = out["q"]["us_per_step_cpu"]
@@ -133,10 +157,11 @@ def algorithms_section(quick: bool) -> dict:
     algos = algorithms(30_000 if quick else 150_000)
     print("  cost per step of each learner.algorithm (fast loop, same steps, this run):")
     for name, r in algos.items():
+        loop = "compiled" if r["compiled"] else "Python loop"
         print(
             f"    {name:<8} x{r['ratio_to_q_cpu']:.2f} one-step Q  "
             f"{r['us_per_step_cpu']:6.1f} us/step  {r['per_cpu_s']:>8,} steps/CPU s  "
-            f"({r['steps']:,} steps, {r['episodes']} episodes)"
+            f"({r['steps']:,} steps, {r['episodes']} episodes, {loop})"
         )
     return algos
 
@@ -148,17 +173,24 @@ def _write(report: dict, out: str | None) -> int:
     return 0
 
 
-def end_to_end(episodes: int, folder: Path) -> dict:
+def end_to_end(episodes: int, folder: Path, save_every: int = 1) -> dict:
     from koolio_pymunk.learning.qtable import QTableStore
     from koolio_pymunk.learning.training import train
 
     env = make_env("fast")
+    name = f"e2e{save_every}"
     with Timer() as t:
         res = train(
-            env, QTableStore(folder / "e2e.qtable"), episodes, 0, folder / "e2e.csv", report=None
+            env,
+            QTableStore(folder / f"{name}.qtable"),
+            episodes,
+            0,
+            folder / f"{name}.csv",
+            report=None,
+            save_every=save_every,
         )
     out = rates(res.steps, t)
-    out["episodes"] = episodes
+    out.update(episodes=episodes, save_every=save_every)
     return out
 
 
@@ -246,6 +278,86 @@ def motion(poses: int, repeats: int = 5) -> dict:
         out_rows[f"compiled_call_us_{label}"] = best(compiled_calls, sel)
         out_rows[f"compiled_loop_us_{label}"] = best(compiled_loop, sel)
     return out_rows
+
+
+def step_costs(poses: int, step_us: float, repeats: int = 3) -> dict:
+    """Microseconds per robot-step of the compiled episode's parts, each in a compiled
+    loop (best of ``repeats``) replaying ``poses`` steps of a seeded learning run in the
+    hallway (the poses before each step, in order, so the ray directions' cache works as
+    in a run): the reading (rays, cameras, noise draws, encoding), the move of each step's
+    action, epsilon-greedy and the Table 11 update on the states read; ``step_us`` is the
+    whole step (the compiled loop's CPU time per step) and the rest is judge, rescue
+    check and the loop."""
+    import numba
+    import numpy as np
+
+    from koolio_pymunk.learning.algorithms import make_learner
+    from koolio_pymunk.learning.episode_kernel import CompiledEpisode, _act, _move, _sense
+    from koolio_pymunk.learning.episodes import Episodes
+    from koolio_pymunk.learning.fleet_kernel import SharedTable, update
+    from koolio_pymunk.learning.qtable import QTable
+
+    @numba.njit
+    def sensing(pts, hs, rng, sense, keys):
+        for i in range(pts.shape[0]):
+            keys[i] = _sense(pts[i, 0], pts[i, 1], hs[i], rng, sense)[0]
+
+    @numba.njit
+    def moving(pts, hs, actions, rng, world):
+        s = 0.0
+        for i in range(pts.shape[0]):
+            s += _move(actions[i], pts[i, 0], pts[i, 1], hs[i], rng, world)[0]
+        return s
+
+    @numba.njit
+    def learning(keys, rewards, arng, index, table):
+        for i in range(keys.shape[0] - 1):
+            a = _act(keys[i], 0.15, arng, 5, index, table[0])
+            update(index, table, 0.2, 0.9, keys[i], a, rewards[i], keys[i + 1], False)
+
+    env = make_env("fast")
+    table = QTable(env.layout, {}, env.config.learner.q_init)
+    agent = make_learner(table, env.config.learner, None)
+    ce = CompiledEpisode(env, agent)
+    sense, world = ce.sense_group(), ce.world_group()
+    run = Episodes(env, agent, 0)  # record a learning run's steps (the Python loop)
+    pts, hs, actions, episode = np.empty((poses, 2)), np.empty(poses), np.empty(poses, int), 0
+    for i in range(poses):
+        if i == 0 or run.outcome is not None:
+            run.begin(episode)
+            episode += 1
+        x, y, h = env.world.pose(0)
+        pts[i], hs[i] = (x, y), h
+        run.step()
+        actions[i] = env.last_action
+    rng = np.random.default_rng(0)
+    rewards = rng.uniform(-10.0, 0.0, poses)
+    keys = np.empty(poses, np.int64)
+
+    def best(fn) -> float:
+        times = []
+        for _ in range(repeats):
+            t0 = time.process_time()
+            fn()
+            times.append(time.process_time() - t0)
+        return round(1e6 * min(times) / poses, 3)
+
+    sensing(pts[:1], hs[:1], rng, sense, keys[:1])
+    moving(pts[:1], hs[:1], actions[:1], rng, world)
+
+    def learn() -> None:
+        sh = SharedTable(QTable(env.layout, {}, env.config.learner.q_init), poses + 1)
+        learning(keys, rewards, np.random.default_rng(1), sh.index, sh.args())
+
+    out = {
+        "poses": poses,
+        "sense_us": best(lambda: sensing(pts, hs, rng, sense, keys)),
+        "move_us": best(lambda: moving(pts, hs, actions, rng, world)),
+    }
+    out["act_learn_us"] = best(learn)
+    out["step_us"] = round(step_us, 3)
+    out["rest_us"] = round(step_us - out["sense_us"] - out["move_us"] - out["act_learn_us"], 3)
+    return out
 
 
 def _near_wall(world, x: float, y: float) -> bool:
@@ -440,26 +552,41 @@ def main(argv: list[str] | None = None) -> int:
     )
     if args.algorithms_only:
         report["algorithms"] = algorithms_section(q)
+
         return _write(report, args.out)
     print(f"  {'':<34} {'per wall s':>10} {'per CPU s':>10}")
     with tempfile.TemporaryDirectory(dir=ROOT) as tmp:
         folder = Path(tmp)
         ref = learning_loop("pymunk", 4_000 if q else 15_000)
         print(table_line("reference (pymunk queries) steps/s", ref))
-        fast = learning_loop("fast", 30_000 if q else 150_000)
+        fast = learning_loop("fast", 60_000 if q else 300_000)
         ratio = fast["per_cpu_s"] / max(1, ref["per_cpu_s"])
         fast["ratio_to_reference_cpu"] = round(ratio, 1)
-        print(table_line("fast backend steps/s", fast, f"x{ratio:.1f} reference"))
-        real = learning_loop("fast", 30_000 if q else 150_000, world="koolio-real")
+        print(table_line("fast backend, compiled steps/s", fast, f"x{ratio:.1f} reference"))
+        python = learning_loop("fast", 30_000 if q else 150_000, compiled=False)
+        gain = fast["per_cpu_s"] / max(1, python["per_cpu_s"])
+        fast["ratio_to_python_loop_cpu"] = round(gain, 2)
+        print(table_line("fast backend, Python loop steps/s", python, f"compiled x{gain:.2f}"))
+        real = learning_loop("fast", 60_000 if q else 300_000, world="koolio-real")
         real_ratio = real["per_cpu_s"] / max(1, fast["per_cpu_s"])
         real["ratio_to_ideal_cpu"] = round(real_ratio, 3)
         real["ratio_to_ideal_wall"] = round(real["per_wall_s"] / max(1, fast["per_wall_s"]), 3)
         print(table_line("koolio-real world steps/s", real, f"{real_ratio:.0%} of ideal (CPU)"))
-        e2e = end_to_end(50 if q else 200, folder)
+        e2e = end_to_end(100 if q else 600, folder)
         print(table_line("train end to end (saves) steps/s", e2e))
+        e2e100 = end_to_end(200 if q else 1_200, folder, save_every=100)
+        print(table_line("train, --save-every 100 steps/s", e2e100))
         multi = many(args.robots, 300 if q else 3000, folder)
         print(table_line(f"{args.robots} robots robot-steps/s", multi))
-        report.update(reference=ref, fast=fast, koolio_real=real, end_to_end=e2e, many=multi)
+        report.update(
+            reference=ref,
+            fast=fast,
+            python_loop=python,
+            koolio_real=real,
+            end_to_end=e2e,
+            end_to_end_save_every_100=e2e100,
+            many=multi,
+        )
 
         mo = report["motion"] = motion(500 if q else 2_000)
         print(
@@ -471,6 +598,14 @@ def main(argv: list[str] | None = None) -> int:
         )
 
         report["algorithms"] = algorithms_section(q)
+
+        step_us = 1e6 * fast["cpu_s"] / max(1, fast["steps"])
+        sc = report["step_costs"] = step_costs(5_000 if q else 20_000, step_us)
+        print(
+            f"  one compiled step, us per robot-step (CPU): {sc['step_us']:.2f} = reading "
+            f"{sc['sense_us']:.2f} + move {sc['move_us']:.2f} + act and learn "
+            f"{sc['act_learn_us']:.2f} + judge, rescue and the loop {sc['rest_us']:.2f}"
+        )
 
         comp = []
         for s in seeds:
@@ -491,7 +626,7 @@ def main(argv: list[str] | None = None) -> int:
 
         prof = profile(20_000 if q else 60_000)
         report["profile"] = prof
-        print("  where the time goes (fast single-robot loop, cProfile own time):")
+        print("  where the time goes (fast single-robot loop, compiled; cProfile own time):")
         for r in prof:
             print(f"    {r['share']:>6.1%} {r['calls']:>9,}  {r['function']}")
 

@@ -409,7 +409,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         store.close()
         return 0
     if not args.quiet:
-        announce_compile(env, robots=args.robots)
+        announce_compile(env, robots=args.robots, training=True)
     report = None if args.quiet else (lambda line: print(label_progress(line)))
     if args.robots > 1:
         from ..learning.fleet import train_many
@@ -821,10 +821,11 @@ def _cached(dispatcher) -> bool:
         return False
 
 
-def kernels_to_compile(env, robots: int = 1) -> bool:
+def kernels_to_compile(env, robots: int = 1, training: bool = False) -> bool:
     """True when a run in ``env`` will compile numba kernels first (a cold cache: the
     first run after installing or changing them): the entry points of the sensing a run
-    uses, looked up in numba's cache index without compiling anything."""
+    uses (and, ``training`` one robot, the compiled episode's when it runs), looked up in
+    numba's cache index without compiling anything."""
     sensors = env.sensors
     if not getattr(sensors, "fused", False):  # the pymunk reference: nothing compiled
         return False
@@ -840,12 +841,16 @@ def kernels_to_compile(env, robots: int = 1) -> bool:
         from ..learning import fleet_kernel
 
         entries.append(fleet_kernel.learn)
+    elif training and env.config.learner.algorithm == "q" and not env.memory.on:
+        from ..learning import episode_kernel
+
+        entries.append(episode_kernel.run_steps)
     return not all(_cached(f) for f in entries)
 
 
-def announce_compile(env, robots: int = 1) -> None:
+def announce_compile(env, robots: int = 1, training: bool = False) -> None:
     """One line before the one-time compile of the sensing kernels, when it is due."""
-    if kernels_to_compile(env, robots):
+    if kernels_to_compile(env, robots, training):
         print(
             "compiling the sensing kernels (first run only, about 5-10 s); "
             "later runs load them from the cache",

@@ -129,6 +129,9 @@ class Episodes:
 
     ``learn`` False only watches (no :meth:`Agent.observe`); ``epsilon``, when given,
     replaces the schedule's value at every episode start (0: the greedy policy).
+    ``compiled`` True runs :meth:`run`'s steps in one compiled call
+    (:mod:`koolio_pymunk.learning.episode_kernel`) when the agent and the env allow it,
+    the same steps bit for bit; :attr:`compiled_reason` says why not otherwise.
     :meth:`begin` starts an episode, :meth:`step` makes one step and returns the outcome
     when the episode ended (``None`` while it runs), :meth:`run` steps to the end,
     :meth:`result` is the episode's log row.
@@ -142,6 +145,7 @@ class Episodes:
         stream: int = TRAIN_STREAM,
         learn: bool = True,
         epsilon: float | None = None,
+        compiled: bool = False,
     ) -> None:
         self.env = env
         self.agent = agent
@@ -153,6 +157,16 @@ class Episodes:
         """The number of the episode begun last (-1: none yet)."""
         self.outcome: str | None = None
         """How the current episode ended (``None`` while it runs)."""
+        self.compiled: Any = None
+        """The compiled steps (:class:`~.episode_kernel.CompiledEpisode`), or None."""
+        self.compiled_reason: str | None = "not asked for"
+        """Why :meth:`run` steps in Python (None: it runs compiled)."""
+        if compiled:
+            from .episode_kernel import CompiledEpisode, why_not
+
+            self.compiled_reason = why_not(env, agent, learn)
+            if self.compiled_reason is None:
+                self.compiled = CompiledEpisode(env, agent)  # type: ignore[arg-type]
 
     def begin(self, episode: int, options: dict[str, Any] | None = None) -> None:
         """Start ``episode``: its seeds, the env's reset, the agent's episode start."""
@@ -185,7 +199,12 @@ class Episodes:
     def run(self, stop: Callable[[], bool | None] | None = None) -> EpisodeResult:
         """Step to the end of the episode; ``stop`` is called after every step that did
         not end it, and a true result ends it as ``interrupted`` (it may also raise, as
-        :meth:`~koolio_pymunk.store.interrupts.SafeInterrupt.check` does)."""
+        :meth:`~koolio_pymunk.store.interrupts.SafeInterrupt.check` does). Compiled, ``stop``
+        is called between chunks of steps (:data:`~.episode_kernel.CHUNK`)."""
+        if self.compiled is not None:
+            outcome = self.compiled.run(stop)
+            self.outcome = INTERRUPTED if outcome is None else outcome
+            return self.result()
         step = self.step
         while step() is None:
             if stop is not None and stop():

@@ -9,8 +9,11 @@ cap). Their experience goes into one :class:`~koolio_pymunk.learning.qtable.QTab
 
 1. every active robot chooses an action epsilon-greedily from the table as it stands
    (:func:`qkernel.choose`);
-2. all robots act together (one set of pymunk sub-steps for the moving robots; the
-   others sleep);
+2. all robots act in one compiled call (:func:`fleet_kernel.move_all`: turns, and each
+   Forward or Reverse a :func:`~koolio_pymunk.world.swept_move.sweep` against the robot's
+   own copy of the walls, in its copy's coordinates, as the pymunk world moves it, bit
+   for bit); the pymunk bodies are set from those positions before a rescue (which moves
+   through pymunk) and at the end of the run;
 3. all robots are sensed in two compiled calls (:func:`raycast.sense_batch`,
    :func:`readout.readout_batch`: robots x rays x walls; always the compiled kernel,
    which reads what the pymunk reference reads);
@@ -71,13 +74,14 @@ import pymunk.batch
 
 from ..sensing.encoding_kernel import readout, readout_batch
 from ..sensing.ray_kernel import new_trig, sense_batch, sense_one
+from ..sensing.sensor_arrays import GEOMETRY, bundle
 from ..store.errors import ConfigError, KoolioError, located
 from ..store.interrupts import SafeInterrupt
 from ..store.realism_config import realism_on
 from ..task.env import KoolioEnv
 from ..task.rescue import rescue_robot
 from ..world.physics import Action, World
-from ..world.segment_query import any_near_wall, wall_array
+from ..world.segment_query import wall_array
 from .episodes import INTERRUPTED, TRUNCATED, EpisodeResult, episode_seeds
 from .fleet_kernel import (
     AT_CAP,
@@ -87,6 +91,7 @@ from .fleet_kernel import (
     SharedTable,
     choose,
     learn,
+    move_all,
     new_journal,
     reward_array,
     undo_writes,
@@ -172,70 +177,30 @@ class Fleet:
         self.flags = np.empty((n, 2), np.bool_)
         self.walls = wall_array(world)  # any backend: the kernel reads robot 0's copy
         self.trig = new_trig(self.k.ray_offsets.size, n)
-
-    def _args(self) -> tuple:
-        k = self.k
-        return (
-            k.fracs,
-            self.suite.n_sonar,
-            k.limits,
-            self.suite.sonar_thresholds,
-            self.suite.camera_thresholds,
-            k.group_members,
-            k.group_sizes,
-            k.bits,
-            k.compass_in_state,
-        )
+        self.geometry = bundle(GEOMETRY, self.k, walls=self.walls)
+        """The sensing kernel's geometry group, with this world's walls."""
 
     def sense_all(
         self, xy: np.ndarray, headings: list[float], draws: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
         """State key of every robot, and their Bump and goal-close flags (``N x 2``)."""
         k = self.k
-        sense_batch(
-            np.ascontiguousarray(xy[:, 0]),
-            np.ascontiguousarray(xy[:, 1]),
-            np.asarray(headings, dtype=np.float64),
-            k.ray_offsets,
-            k.params,
-            k.camera_dirs,
-            self.goals,
-            k.markers,
-            self.walls,
-            self.raw,
-            self.rays,
-            self.eow_k,
-            self.trig,
-        )
-        readout_batch(
-            self.raw, draws, *self._args(), self.out, self.eow_k, self.codes, self.keys, self.flags
-        )
+        xs, ys = np.ascontiguousarray(xy[:, 0]), np.ascontiguousarray(xy[:, 1])
+        hs = np.asarray(headings, dtype=np.float64)
+        sense_batch(xs, ys, hs, self.geometry, self.goals, self.raw, self.rays, self.eow_k,
+                    self.trig)  # fmt: skip
+        readout_batch(self.raw, draws, k.encoding, self.out, self.eow_k, self.codes, self.keys,
+                      self.flags)  # fmt: skip
         return self.keys, self.flags
 
     def sense_one(self, r: int, rng: np.random.Generator) -> tuple[int, bool, bool]:
         """Robot ``r`` alone (after a reset or a rescue), noise from ``rng``."""
         k = self.k
         x, y, h = self.world.pose(r)
-        sense_one(
-            x,
-            y,
-            h,
-            k.ray_offsets,
-            k.params,
-            k.camera_dirs,
-            self.goals[r],
-            k.markers,
-            self.walls,
-            self.raw[r],
-            self.rays[r],
-            self.eow_k[r],
-            self.trig[r],
-            k.plates,
-            k.ray_cos,
-            k.decoy,
-        )
+        buffers = (self.raw[r], self.rays[r], self.eow_k[r], self.trig[r], k.ray_cos, k.decoy)
+        sense_one(x, y, h, self.geometry, self.goals[r], k.plates, buffers)
         draws = self.suite.draw_noise(rng, k.n_raw)
-        return readout(self.raw[r], draws, *self._args(), self.out[r], self.eow_k[r], self.codes[r])
+        return readout(self.raw[r], draws, k.encoding, self.out[r], self.eow_k[r], self.codes[r])
 
 
 class _Episode:
@@ -318,7 +283,13 @@ class _Run:
         self.seed = seed
         self.n = robots
         self.world = World.from_arena(env.arena, cfg.robot.radius, robots)
-        self.poses = PoseReader(self.world)
+        self.copy_walls = np.stack([wall_array(self.world, k) for k in range(robots)])
+        """Every robot's copy of the walls (``move_all``)."""
+        self.offsets = np.asarray(self.world.offsets, dtype=np.float64)
+        self.copy_xy = np.array([self.world.copy_position(k) for k in range(robots)])
+        """Every robot's body position in its copy (the compiled moves keep it; the pymunk
+        bodies are set from it before a rescue and at the end)."""
+        self.motion = (float(env.move_distance), float(env.turn_arc), float(cfg.robot.radius))
         self.fleet = Fleet(env, self.world)
         self.progress = Progress()
         self.results: list[EpisodeResult] = []
@@ -369,6 +340,7 @@ class _Run:
         )
         world.place(r, start.at, float(heading))
         self.xy[r] = world.pose(r)[:2]
+        self.copy_xy[r] = world.copy_position(r)
         self.state[r] = self.fleet.sense_one(r, rng)[0]
         self.active[r] = True
         self.epsilon[r] = ep.epsilon
@@ -427,6 +399,8 @@ class _Run:
                     self._interrupt(discard_unfinished, report)
         finally:
             self.files.close()
+            for k in range(self.n):  # the pymunk bodies where the compiled moves left them
+                self.world.set_copy_position(k, *self.copy_xy[k])
         self.shared.sync()
         p = self.progress
         return TrainResult(
@@ -494,18 +468,21 @@ class _Run:
         choose(sh.index, sh.q, self.state, self.active, self.epsilon, explore, random_action,
                tie, self.actions)  # fmt: skip
         world = self.world
-        world.act(self.actions.tolist(), self.env.move_distance, self.env.turn_arc, self._near_wall)
-        xy = self.xy = self.poses.xy()
-        keys, flags = self.fleet.sense_all(xy, world.heading, draws)
+        headings = np.array(world.heading)
+        move_all(self.actions, self.copy_xy, headings, self.copy_walls, self.offsets,
+                 self.motion, self.xy)  # fmt: skip
+        world.heading[:] = headings.tolist()
+        xy = self.xy
+        keys, flags = self.fleet.sense_all(xy, headings, draws)
         lc = self.cfg.learner
+        tick = (self.active, self.actions, self.state, keys, flags[:, 0], flags[:, 1], xy)
+        rules = (self.reward, lc.alpha, lc.gamma, self.zones, self.rescue_after,
+                 self.cfg.episode.max_steps)  # fmt: skip
+        counters = (self.steps, self.bumps, self.total, self.event)
+        table = sh.args()
         r = 0
         while r < n:
-            r, why = learn(
-                r, self.active, self.actions, self.state, keys, flags[:, 0], flags[:, 1], xy,
-                self.reward, lc.alpha, lc.gamma, self.zones, self.rescue_after,
-                self.cfg.episode.max_steps, self.steps, self.bumps, self.total, self.event,
-                *self.journal, *sh.args(),
-            )  # fmt: skip
+            r, why = learn(r, tick, rules, counters, self.journal, sh.index, table)
             if why == RESCUE_DRAW:
                 self._rescue_step(r, int(keys[r]))
             elif why == TERMINAL:
@@ -525,10 +502,6 @@ class _Run:
         grown[1][:, :cap] = jf
         self.journal = (grown[0], grown[1], jn, seq)
 
-    def _near_wall(self, movers: list[int], reach: float) -> bool:
-        """World.act's sub-step choice from the known positions (``self.xy``)."""
-        return any_near_wall(self.xy, np.array(movers, np.int64), reach, self.fleet.walls)
-
     def _rescue_step(self, r: int, nxt: int) -> None:
         """Robot ``r`` bumped past ``max_steps_before_rescue``: its update (from the state
         the action led to), then the rescue draw, maybe a rescue (new reading), and the
@@ -537,12 +510,14 @@ class _Run:
         assert ep is not None
         lc = self.cfg.learner
         code = int(self.event[r])
-        update_logged(*self.shared.args(), lc.alpha, lc.gamma, int(self.state[r]),
+        update_logged(self.shared.index, self.shared.args(), lc.alpha, lc.gamma, int(self.state[r]),
                       int(self.actions[r]), float(self.reward[code]), nxt, False, r,
-                      *self.journal)  # fmt: skip
+                      self.journal)  # fmt: skip
         if ep.rng.random() < self.cfg.rescue.rescue_chance:
+            self.world.set_copy_position(r, *self.copy_xy[r])
             rescue_robot(self.world, r, self.cfg.rescue, self.env.move_distance, ep.rng)
             self.xy[r] = self.world.pose(r)[:2]
+            self.copy_xy[r] = self.world.copy_position(r)
             nxt = self.fleet.sense_one(r, ep.rng)[0]
             ep.rescued = True
         self.state[r] = nxt

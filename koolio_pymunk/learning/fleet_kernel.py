@@ -25,6 +25,8 @@ peek, QLearner.update, rules.judge, EndZones.contains, geometry.locate_point);
 
 from __future__ import annotations
 
+import math
+
 import numba
 import numpy as np
 from numba import types
@@ -34,8 +36,9 @@ from ..store.config import RewardConfig
 from ..task.end_zones import EndZones
 from ..task.rules import ACTION_TERMS, TERMINAL_EVENTS, TERMS
 from ..world.geometry import EPS
-from ..world.physics import Action
+from ..world.physics import TWO_PI, Action
 from ..world.segment_query import hypot
+from ..world.swept_move import sweep
 from .qtable import QTable
 
 #: :func:`learn`'s reasons to stop at a robot.
@@ -95,7 +98,10 @@ class SharedTable:
         self.dirty[:] = False
 
     def args(self) -> tuple:
-        return (self.index, self.q, self.keys, self.dirty, self.count, self.q_init)
+        """The kernels' table group ``(q, keys, dirty, count, q_init)``; the typed dict
+        :attr:`index` goes beside it (a tuple holding a typed dict costs numba's slow
+        argument typing at every call)."""
+        return (self.q, self.keys, self.dirty, self.count, self.q_init)
 
 
 @numba.njit(cache=True)
@@ -116,8 +122,10 @@ def _find(index, key: int) -> int:
 
 
 @numba.njit(cache=True)
-def _row(index, q, keys, dirty, count, q_init, key: int) -> int:
-    """The row of ``key``, created at ``q_init`` when missing (``QTable.row``)."""
+def _row(index, table: tuple, key: int) -> int:
+    """The row of ``key``, created at ``q_init`` when missing (``QTable.row``);
+    ``table`` is :meth:`SharedTable.args`."""
+    q, keys, dirty, count, q_init = table
     i = _find(index, key)
     if i < 0:
         i = count[0]
@@ -131,12 +139,12 @@ def _row(index, q, keys, dirty, count, q_init, key: int) -> int:
 
 
 @numba.njit(cache=True)
-def update(
-    index, q, keys, dirty, count, q_init, alpha: float, gamma: float,
-    state: int, action: int, reward: float, nxt: int, terminal: bool,
-) -> None:  # fmt: skip
-    """``QLearner.update``: Table 11, no bootstrap from a terminal step."""
-    i = _row(index, q, keys, dirty, count, q_init, state)
+def update(index, table: tuple, alpha: float, gamma: float, state: int, action: int, reward: float,
+           nxt: int, terminal: bool) -> None:  # fmt: skip
+    """``QLearner.update``: Table 11, no bootstrap from a terminal step (``table``:
+    :meth:`SharedTable.args`)."""
+    q, dirty, q_init = table[0], table[2], table[4]
+    i = _row(index, table, state)
     if terminal:
         target = reward
     else:
@@ -160,21 +168,20 @@ def new_journal(robots: int, capacity: int) -> tuple[np.ndarray, ...]:
 
 @numba.njit(cache=True)
 def update_logged(
-    index, q, keys, dirty, count, q_init, alpha: float, gamma: float,
-    state: int, action: int, reward: float, nxt: int, terminal: bool,
-    r: int, jint: np.ndarray, jf: np.ndarray, jn: np.ndarray, seq: np.ndarray,
+    index, table: tuple, alpha: float, gamma: float, state: int, action: int, reward: float,
+    nxt: int, terminal: bool, r: int, journal: tuple,
 ) -> None:  # fmt: skip
-    """:func:`update`, recorded in robot ``r``'s journal when it has room (``jn[r]``
-    counts every update, so an overflow shows)."""
+    """:func:`update`, recorded in robot ``r``'s journal (:func:`new_journal`) when it has
+    room (``jn[r]`` counts every update, so an overflow shows)."""
+    jint, jf, jn, seq = journal
     if jint.shape[1] == 0:
-        update(index, q, keys, dirty, count, q_init, alpha, gamma, state, action, reward, nxt,
-               terminal)  # fmt: skip
+        update(index, table, alpha, gamma, state, action, reward, nxt, terminal)
         return
+    q, count = table[0], table[3]
     before = count[0]
-    i = _row(index, q, keys, dirty, count, q_init, state)
+    i = _row(index, table, state)
     old = q[i, action]
-    update(index, q, keys, dirty, count, q_init, alpha, gamma, state, action, reward, nxt,
-           terminal)  # fmt: skip
+    update(index, table, alpha, gamma, state, action, reward, nxt, terminal)
     k = jn[r]
     if k < jint.shape[1]:
         jint[r, k, 0] = i
@@ -241,6 +248,35 @@ def choose(
 
 
 @numba.njit(cache=True)
+def move_all(
+    actions: np.ndarray, copy_xy: np.ndarray, headings: np.ndarray, walls: np.ndarray,
+    offsets: np.ndarray, motion: tuple, xy: np.ndarray,
+) -> None:  # fmt: skip
+    """``World.act`` for every robot, compiled: rotations turn ``headings``, Forward and
+    Reverse are :func:`~koolio_pymunk.world.swept_move.sweep` of robot ``r`` from
+    ``copy_xy[r]`` (its body's position in its copy of the arena) against ``walls[r]``
+    (its copy's walls, ``wall_array(world, r)``), as the pymunk world computes them;
+    ``xy[r]`` = the position in the arena's coordinates (``PoseReader.xy``).
+    ``motion`` = ``(move distance, turn arc, radius)``."""
+    distance, arc, radius = motion
+    for r in range(actions.shape[0]):
+        a = actions[r]
+        if a == 1:
+            headings[r] = (headings[r] + arc) % TWO_PI
+        elif a == 2:
+            headings[r] = (headings[r] - arc) % TWO_PI
+        elif a == 3 or a == 4:
+            d = distance if a == 3 else -distance
+            h = headings[r]
+            x, y = sweep(walls[r], copy_xy[r, 0], copy_xy[r, 1], d * math.cos(h), d * math.sin(h),
+                         radius)  # fmt: skip
+            copy_xy[r, 0] = x
+            copy_xy[r, 1] = y
+        xy[r, 0] = copy_xy[r, 0] - offsets[r]
+        xy[r, 1] = copy_xy[r, 1]
+
+
+@numba.njit(cache=True)
 def _on_segment(px: float, py: float, ax: float, ay: float, bx: float, by: float) -> bool:
     """``geometry.point_on_segment``: distance to the closed segment at most EPS."""
     dx, dy = bx - ax, by - ay
@@ -297,24 +333,25 @@ def zone_arrays(zones: EndZones) -> tuple:
 
 
 @numba.njit(cache=True)
-def learn(
-    start: int, active: np.ndarray, actions: np.ndarray, state: np.ndarray,
-    nxt: np.ndarray, bumps: np.ndarray, closes: np.ndarray, xy: np.ndarray,
-    reward: np.ndarray, alpha: float, gamma: float, zones: tuple,
-    rescue_after: int, cap: int,
-    steps: np.ndarray, n_bumps: np.ndarray, total: np.ndarray, event: np.ndarray,
-    jint: np.ndarray, jf: np.ndarray, jn: np.ndarray, seq: np.ndarray,
-    index, q, keys, dirty, count, q_init,
-) -> tuple[int, int]:  # fmt: skip
+def learn(start: int, tick: tuple, rules: tuple, counters: tuple, journal: tuple, index,
+          table: tuple) -> tuple[int, int]:  # fmt: skip
     """Judge and learn the step of robots ``start, start + 1, ...`` (module doc).
 
-    ``reward`` holds the reward of each event code; ``rescue_after`` is
-    ``max_steps_before_rescue`` (-1: auto rescue off); ``cap`` the step cap (0: none);
-    ``jint, jf, jn, seq`` the journal (:func:`update_logged`).
+    ``tick`` = ``(active, actions, state, nxt, bumps, closes, xy)``: per robot, the tick's
+    action, state before and after, Bump and goal-close flags and position; ``rules`` =
+    ``(reward, alpha, gamma, zones, rescue_after, cap)``: ``reward`` holds the reward of
+    each event code, ``zones`` is :func:`zone_arrays`, ``rescue_after`` is
+    ``max_steps_before_rescue`` (-1: auto rescue off), ``cap`` the step cap (0: none);
+    ``counters`` = ``(steps, n_bumps, total, event)`` per robot; ``journal`` is
+    :func:`new_journal`'s (:func:`update_logged`), ``index`` and ``table`` the shared
+    table's (:meth:`SharedTable.args`).
     Returns ``(robot, reason)``: ``RESCUE_DRAW`` before the robot's update (Python
     updates, then draws and maybe rescues), ``TERMINAL`` / ``AT_CAP`` after it;
     ``(n, DONE)``.
     """
+    active, actions, state, nxt, bumps, closes, xy = tick
+    reward, alpha, gamma, zones, rescue_after, cap = rules
+    steps, n_bumps, total, event = counters
     discs, disc_radius, points, starts, boxes = zones
     for r in range(start, state.shape[0]):
         if not active[r]:
@@ -335,8 +372,8 @@ def learn(
         total[r] += reward[code]
         if not terminal and rescue_after >= 0 and bumps[r] and steps[r] > rescue_after:
             return r, RESCUE_DRAW
-        update_logged(index, q, keys, dirty, count, q_init, alpha, gamma, state[r], a,
-                      reward[code], nxt[r], terminal, r, jint, jf, jn, seq)  # fmt: skip
+        update_logged(index, table, alpha, gamma, state[r], a, reward[code], nxt[r], terminal, r,
+                      journal)  # fmt: skip
         state[r] = nxt[r]
         if terminal:
             return r, TERMINAL

@@ -317,6 +317,7 @@ def train(
     eval_episodes: int = DEFAULT_EVAL_EPISODES,
     save_every: int = 1,
     save_seconds: float | None = None,
+    compiled: bool = True,
 ) -> TrainResult:
     """Train for ``episodes`` more episodes, saving the table after each one (the
     paper's rule), or every ``save_every`` episodes and/or every ``save_seconds``
@@ -331,6 +332,10 @@ def train(
     (:class:`SafeInterrupt`). The table and the log are locked while it
     runs (:meth:`RunFiles.open`); a failed write (disk full) stops it with a
     :class:`~koolio_pymunk.store.errors.FileError`, the files holding the last good table.
+
+    ``compiled`` (the default) runs each episode's steps in one compiled call when the
+    learner and the world allow it (:mod:`koolio_pymunk.learning.episode_kernel`: the
+    same steps, bit for bit); False always runs the Python loop (the reference).
 
     ``eval_every`` N > 0: a greedy check of ``eval_episodes`` episodes each time the
     table's episode count reaches a multiple of N, and the best table kept
@@ -352,7 +357,7 @@ def train(
     results: list[EpisodeResult] = []
     checks: list[Check] = []
     agent = make_learner(table, env.config.learner, None, str(store.path))
-    loop = Episodes(env, agent, seed, TRAIN_STREAM)
+    loop = Episodes(env, agent, seed, TRAIN_STREAM, compiled=compiled)
     last_report = time.perf_counter()
     interrupted = False
     try:

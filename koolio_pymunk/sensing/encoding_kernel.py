@@ -78,29 +78,18 @@ def wrap_compass(units: float) -> float:
 
 
 @numba.njit(cache=True)
-def readout(
-    raw: np.ndarray,
-    draws: np.ndarray,
-    fracs: np.ndarray,
-    n_sonar: int,
-    limits: np.ndarray,
-    sonar_thresholds: np.ndarray,
-    camera_thresholds: np.ndarray,
-    group_members: np.ndarray,
-    group_sizes: np.ndarray,
-    bits: np.ndarray,
-    compass_in_state: bool,
-    out: np.ndarray,
-    eow_k: np.ndarray,
-    codes: np.ndarray,
-) -> tuple[int, bool, bool]:
+def readout(raw: np.ndarray, draws: np.ndarray, encoding: tuple, out: np.ndarray,
+            eow_k: np.ndarray, codes: np.ndarray) -> tuple[int, bool, bool]:  # fmt: skip
     """Noise, limit and encode ``raw``; returns ``(state_key, bump, goal_close)``.
 
+    ``encoding`` is the group of :data:`koolio_pymunk.sensing.sensor_arrays.ENCODING`:
     ``limits`` = ``[really_long_distance, max_camera_view]``; ``draws`` are the uniform
     (-1, 1) or standard-normal draws and ``fracs`` the matching noise fractions (halved
     for the gaussian model). Writes the noised readings to ``out``, clears ``eow_k[c]``
     to -1 when camera ``c`` ends up seeing no marker, and writes the state ``codes``.
     """
+    (fracs, n_sonar, limits, sonar_thresholds, camera_thresholds, group_members, group_sizes,
+     bits, compass_in_state) = encoding  # fmt: skip
     far = limits[0]
     max_view = limits[1]
     m = raw.shape[0]
@@ -143,42 +132,13 @@ def readout(
 
 @numba.njit(cache=True)
 def readout_batch(
-    raw: np.ndarray,
-    draws: np.ndarray,
-    fracs: np.ndarray,
-    n_sonar: int,
-    limits: np.ndarray,
-    sonar_thresholds: np.ndarray,
-    camera_thresholds: np.ndarray,
-    group_members: np.ndarray,
-    group_sizes: np.ndarray,
-    bits: np.ndarray,
-    compass_in_state: bool,
-    out: np.ndarray,
-    eow_k: np.ndarray,
-    codes: np.ndarray,
-    keys: np.ndarray,
-    flags: np.ndarray,
-) -> None:
+    raw: np.ndarray, draws: np.ndarray, encoding: tuple, out: np.ndarray, eow_k: np.ndarray,
+    codes: np.ndarray, keys: np.ndarray, flags: np.ndarray,
+) -> None:  # fmt: skip
     """:func:`readout` of row ``r`` of ``raw``/``draws`` for every robot ``r``: writes
     ``keys[r]``, ``flags[r, 0]`` (Bump) and ``flags[r, 1]`` (goal close)."""
     for r in range(raw.shape[0]):
-        key, bump, close = readout(
-            raw[r],
-            draws[r],
-            fracs,
-            n_sonar,
-            limits,
-            sonar_thresholds,
-            camera_thresholds,
-            group_members,
-            group_sizes,
-            bits,
-            compass_in_state,
-            out[r],
-            eow_k[r],
-            codes[r],
-        )
+        key, bump, close = readout(raw[r], draws[r], encoding, out[r], eow_k[r], codes[r])
         keys[r] = key
         flags[r, 0] = bump
         flags[r, 1] = close

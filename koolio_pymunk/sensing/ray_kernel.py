@@ -128,26 +128,11 @@ def cone_nearest(
 
 
 @numba.njit(cache=True)
-def sense_one(
-    x: float,
-    y: float,
-    h: float,
-    ray_offsets: np.ndarray,
-    params: np.ndarray,
-    camera_dirs: np.ndarray,
-    goal: np.ndarray,
-    markers: np.ndarray,
-    walls: np.ndarray,
-    raw: np.ndarray,
-    rays: np.ndarray,
-    eow_k: np.ndarray,
-    trig: np.ndarray,
-    plates: np.ndarray,
-    ray_cos: np.ndarray,
-    decoy: np.ndarray,
-) -> None:
+def sense_one(x: float, y: float, h: float, geometry: tuple, goal: np.ndarray, plates: np.ndarray,
+              buffers: tuple) -> None:  # fmt: skip
     """One noise-free reading of every sensor of a robot at ``(x, y, h)``.
 
+    ``geometry`` and ``buffers`` are the groups of :mod:`koolio_pymunk.sensing.sensor_arrays`.
     ``params`` = ``[ray_length, radius, really_long_distance, camera_half_arc,
     sonar_model, sonar_half_arc, incidence]``; ``sonar_model`` 0 is the paper's sub-arc
     rays, 1 the exact cone (:func:`cone_nearest` around the mean of each sonar's ray
@@ -162,6 +147,8 @@ def sense_one(
     headings: moves and stops keep the heading and turns often come back to one, so few
     readings pay for the trigonometry (the values are the same either way).
     """
+    ray_offsets, params, camera_dirs, markers, walls = geometry
+    raw, rays, eow_k, trig, ray_cos, decoy = buffers
     length = params[0]
     radius = params[1]
     far = params[2]
@@ -285,20 +272,9 @@ def _sense_sub_arcs(
 
 @numba.njit(cache=True)
 def sense_batch(
-    xs: np.ndarray,
-    ys: np.ndarray,
-    hs: np.ndarray,
-    ray_offsets: np.ndarray,
-    params: np.ndarray,
-    camera_dirs: np.ndarray,
-    goals: np.ndarray,
-    markers: np.ndarray,
-    walls: np.ndarray,
-    raw: np.ndarray,
-    rays: np.ndarray,
-    eow_k: np.ndarray,
-    trig: np.ndarray,
-) -> None:
+    xs: np.ndarray, ys: np.ndarray, hs: np.ndarray, geometry: tuple, goals: np.ndarray,
+    raw: np.ndarray, rays: np.ndarray, eow_k: np.ndarray, trig: np.ndarray,
+) -> None:  # fmt: skip
     """:func:`sense_one` for robot ``r`` at ``(xs[r], ys[r], hs[r])`` with goal
     ``goals[r]``, writing row ``r`` of ``raw``, ``rays``, ``eow_k`` and ``trig`` (the
     ideal world: ``params[6]`` must be 0, no plates)."""
@@ -306,24 +282,8 @@ def sense_batch(
     no_cos = np.empty((0, 0))
     no_decoy = np.empty(0)
     for r in range(xs.shape[0]):
-        sense_one(
-            xs[r],
-            ys[r],
-            hs[r],
-            ray_offsets,
-            params,
-            camera_dirs,
-            goals[r],
-            markers,
-            walls,
-            raw[r],
-            rays[r],
-            eow_k[r],
-            trig[r],
-            no_plates,
-            no_cos,
-            no_decoy,
-        )
+        buffers = (raw[r], rays[r], eow_k[r], trig[r], no_cos, no_decoy)
+        sense_one(xs[r], ys[r], hs[r], geometry, goals[r], no_plates, buffers)
 
 
 # -- engines -------------------------------------------------------------------------------

@@ -200,45 +200,10 @@ def apply_realism(
 
 
 @numba.njit(cache=True)
-def sense_realism(
-    x: float,
-    y: float,
-    h: float,
-    ray_offsets: np.ndarray,
-    params: np.ndarray,
-    camera_dirs: np.ndarray,
-    goal: np.ndarray,
-    markers: np.ndarray,
-    walls: np.ndarray,
-    raw: np.ndarray,
-    rays: np.ndarray,
-    eow_k: np.ndarray,
-    trig: np.ndarray,
-    ray_cos: np.ndarray,
-    decoy: np.ndarray,
-    plates: np.ndarray,
-    noise: np.ndarray,
-    u: np.ndarray,
-    noise_from_u: bool,
-    rparams: np.ndarray,
-    rflags: np.ndarray,
-    neighbours: np.ndarray,
-    echo: np.ndarray,
-    crossed: np.ndarray,
-    missed: np.ndarray,
-    misread: np.ndarray,
-    fracs: np.ndarray,
-    n_sonar: int,
-    limits: np.ndarray,
-    sonar_thresholds: np.ndarray,
-    camera_thresholds: np.ndarray,
-    group_members: np.ndarray,
-    group_sizes: np.ndarray,
-    bits: np.ndarray,
-    compass_in_state: bool,
-    out: np.ndarray,
-    codes: np.ndarray,
-) -> tuple[int, bool, bool]:
+def sense_realism(x: float, y: float, h: float, geometry: tuple, goal: np.ndarray,
+                  plates: np.ndarray, buffers: tuple, noise: np.ndarray, u: np.ndarray,
+                  noise_from_u: bool, realism: tuple, encoding: tuple, out: np.ndarray,
+                  codes: np.ndarray) -> tuple[int, bool, bool]:  # fmt: skip
     """One reading in a realistic world: ``(state_key, bump, goal_close)``.
 
     :func:`raycast.sense_one` (without other plates), then, per camera whose misread
@@ -248,14 +213,17 @@ def sense_realism(
     uniform noise model) ``u`` holds both, from one generator call: first the readings'
     uniforms, turned into ``noise`` as ``rng.uniform(-1, 1)`` turns them (``-1 + 2 u``),
     then the realism uniforms."""
+    params, camera_dirs, walls = geometry[1], geometry[2], geometry[4]
+    raw, rays, eow_k, _, ray_cos, decoy = buffers
+    rparams, rflags, neighbours, echo, crossed, missed, misread = realism
+    n_sonar = encoding[1]
     m = raw.shape[0]
     if noise_from_u:
         for i in range(m):
             noise[i] = -1.0 + 2.0 * u[i]
         u = u[m:]
     no_plates = plates[:0]
-    sense_one(x, y, h, ray_offsets, params, camera_dirs, goal, markers, walls, raw, rays,
-              eow_k, trig, no_plates, ray_cos, decoy)  # fmt: skip
+    sense_one(x, y, h, geometry, goal, no_plates, buffers)
     far = params[2]
     for c in range(camera_dirs.shape[0]):
         decoy[c] = far
@@ -264,7 +232,4 @@ def sense_realism(
             decoy[c] = _camera(x, y, direction, plates, params[3], params[1], far, walls)[0]
     apply_realism(raw, rays, ray_cos, decoy, u, rparams, rflags, neighbours, echo, crossed,
                   missed, misread)  # fmt: skip
-    # fmt: off
-    return readout(raw, noise, fracs, n_sonar, limits, sonar_thresholds, camera_thresholds,
-                   group_members, group_sizes, bits, compass_in_state, out, eow_k, codes)
-    # fmt: on
+    return readout(raw, noise, encoding, out, eow_k, codes)

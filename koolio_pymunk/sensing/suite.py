@@ -58,6 +58,7 @@ from ..store.realism_config import RealismConfig
 from ..world.arena import Point
 from ..world.physics import World
 from .realism import SensorRealism, apply_reference
+from .sensor_arrays import BUFFERS, ENCODING, GEOMETRY, REALISM, bundle
 
 # The compiled kernels (raycast.py, readout.py) import numba, which takes a large part of
 # a second to load: they are imported when a SensorSuite is made, not with this module, so
@@ -303,6 +304,11 @@ class SensorSuite:
             self._last = self.kernel.last_readings()
         return self._last
 
+    def forget_last(self) -> None:
+        """The compiled kernel's buffers hold a newer reading than :meth:`last` built
+        (read elsewhere with this suite's kernel inputs): build it again when asked."""
+        self._last = None
+
     def encode(self, r: Readings) -> tuple[int, ...]:
         """The state: codes in keyword order (Tables 6, 7 and 12)."""
         goal = np.searchsorted(self.camera_thresholds, r.goal, side="right")
@@ -471,6 +477,13 @@ class KernelInputs:
         self._sense_realism_kernel = sense_realism
         self.trig = new_trig(self.ray_offsets.size)
         self.pose = (0.0, 0.0, 0.0)
+        self.sonar_thresholds = s.sonar_thresholds
+        self.camera_thresholds = s.camera_thresholds
+        self.n_sonar = s.n_sonar
+        self.geometry = bundle(GEOMETRY, self)
+        """The rays' and cameras' group (:data:`~.sensor_arrays.GEOMETRY`)."""
+        self.encoding = bundle(ENCODING, self)
+        """The read-out's group (:data:`~.sensor_arrays.ENCODING`)."""
         # Realism: inputs and what the models report of the last reading.
         self.ray_cos = np.zeros(self.ray_offsets.shape)
         self.decoy = np.full(s.n_camera, s.far)
@@ -478,6 +491,8 @@ class KernelInputs:
         self.crossed = np.zeros(s.n_sonar, np.bool_)
         self.missed = np.zeros((s.n_camera, 2), np.bool_)
         self.misread = np.zeros(s.n_camera, np.bool_)
+        self.buffers = bundle(BUFFERS, self)
+        """This suite's reading buffers (:data:`~.sensor_arrays.BUFFERS`)."""
         self.configure_realism()
 
     def configure_realism(self) -> None:
@@ -490,15 +505,9 @@ class KernelInputs:
         self.plates = np.array(plates, dtype=np.float64).reshape(-1, 2)
         self.decoy[:] = s.far
         self.noise = np.zeros(self.n_raw)
-        self._geometry_args = (self.ray_offsets, self.params, self.camera_dirs, self.goal,
-                               self.markers, self.walls, self.raw, self.rays, self.eow_k,
-                               self.trig, self.ray_cos, self.decoy, self.plates)  # fmt: skip
-        self._realism_args = (
-            real.params, real.flags, real.neighbours, self.echo, self.crossed, self.missed,
-            self.misread, self.fracs, s.n_sonar, self.limits, s.sonar_thresholds,
-            s.camera_thresholds, self.group_members, self.group_sizes, self.bits,
-            self.compass_in_state, self.out, self.codes,
-        )  # fmt: skip
+        self.realism = bundle(REALISM, self, params=real.params, flags=real.flags,
+                              neighbours=real.neighbours)  # fmt: skip
+        """The realism models' group (:data:`~.sensor_arrays.REALISM`)."""
 
     def key(self, codes: Sequence[int]) -> int:
         """The state key of ``codes`` (same as ``KeywordLayout.state_key``)."""
@@ -518,24 +527,14 @@ class KernelInputs:
         ray_cos: np.ndarray | None = None,
         decoy: np.ndarray | None = None,
     ) -> None:
-        self._sense_one(
-            float(x),
-            float(y),
-            float(h),
-            self.ray_offsets,
-            self.params,
-            self.camera_dirs,
-            self.goal,
-            self.markers,
-            self.walls,
-            raw,
-            rays,
-            eow_k,
-            self.trig,
-            self.plates,
-            self.ray_cos if ray_cos is None else ray_cos,
-            self.decoy if decoy is None else decoy,
-        )
+        if ray_cos is None and decoy is None and raw is self.raw:
+            buffers = self.buffers
+        else:
+            ray_cos = self.ray_cos if ray_cos is None else ray_cos
+            decoy = self.decoy if decoy is None else decoy
+            buffers = (raw, rays, eow_k, self.trig, ray_cos, decoy)
+        self._sense_one(float(x), float(y), float(h), self.geometry, self.goal, self.plates,
+                        buffers)  # fmt: skip
 
     def sense_readout(
         self, pose: tuple[float, float, float], rng: np.random.Generator
@@ -549,22 +548,7 @@ class KernelInputs:
             draws = rng.standard_normal(self.n_raw)
         else:
             draws = rng.uniform(-1.0, 1.0, self.n_raw)  # as draw_noise, one call less
-        return self._readout(
-            self.raw,
-            draws,
-            self.fracs,
-            self.suite.n_sonar,
-            self.limits,
-            self.suite.sonar_thresholds,
-            self.suite.camera_thresholds,
-            self.group_members,
-            self.group_sizes,
-            self.bits,
-            self.compass_in_state,
-            self.out,
-            self.eow_k,
-            self.codes,
-        )
+        return self._readout(self.raw, draws, self.encoding, self.out, self.eow_k, self.codes)
 
     def _sense_realism(
         self, x: float, y: float, h: float, rng: np.random.Generator
@@ -579,8 +563,8 @@ class KernelInputs:
         else:
             u = rng.random(self.n_raw + n_draws)
         return self._sense_realism_kernel(
-            float(x), float(y), float(h), *self._geometry_args, self.noise, u,
-            not self.gaussian, *self._realism_args,
+            float(x), float(y), float(h), self.geometry, self.goal, self.plates, self.buffers,
+            self.noise, u, not self.gaussian, self.realism, self.encoding, self.out, self.codes,
         )  # fmt: skip
 
     def last_readings(self) -> tuple[Readings, tuple[int, ...]]:

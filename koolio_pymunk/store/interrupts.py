@@ -89,9 +89,11 @@ class SafeInterrupt:
             self.pending = False
             self.taken = True
             raise KeyboardInterrupt
-        self.pending = True
-        self.signal = signal.Signals(signum)
+        # the time first: a second signal can run this handler again before this one
+        # returns, and must then find the first one pending since now, not since long ago
         self._since = time.monotonic()
+        self.signal = signal.Signals(signum)
+        self.pending = True
 
     def check(self) -> None:
         """Raise ``KeyboardInterrupt`` if a Ctrl-C is pending (it is then being handled:

@@ -290,6 +290,26 @@ class KoolioEnv(gym.Env):
             return True
         return False
 
+    def adopt(
+        self,
+        pose: tuple[float, float, float],
+        state_key: int,
+        counters: tuple[int, int, float],
+        rescued: tuple[bool, bool],
+    ) -> None:
+        """Take the state reached by steps run outside :meth:`simulate` with this env's
+        generator, sensors and world (the compiled episode,
+        :mod:`koolio_pymunk.learning.episode_kernel`): the robot's pose, the state key,
+        ``(steps, bumps, episode_reward)`` and ``(has_been_rescued, rescued)``. The
+        last reading is then read from the sensor kernel's buffers."""
+        self.world.place(0, pose[:2], pose[2])
+        self._pose = self.world.pose(0)
+        self.state_key = state_key
+        self.steps, self.bumps, self.episode_reward = counters
+        self.has_been_rescued, self.rescued = rescued
+        self._check_rescue = False
+        self.sensors.forget_last()
+
     def rescue(self) -> tuple[np.ndarray, dict[str, Any]]:
         """Force ``Rescue_Robot`` now (the viewer's Rescue button)."""
         self._rescue()

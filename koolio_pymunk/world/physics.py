@@ -341,6 +341,16 @@ class World:
         self._cp.set_position(self.bodies[i], float(at[0]) + self.offsets[i], float(at[1]))
         self.heading[i] = heading % TWO_PI
 
+    def copy_position(self, i: int) -> tuple[float, float]:
+        """Robot ``i``'s centre in its own copy's coordinates, exactly as its body holds it
+        (what a compiled move of the copy's walls starts from)."""
+        return self._cp.position(self.bodies[i])
+
+    def set_copy_position(self, i: int, x: float, y: float) -> None:
+        """Put robot ``i``'s body at ``(x, y)`` in its copy's coordinates (a compiled
+        move's end, handed back), the heading unchanged."""
+        self._cp.set_position(self.bodies[i], float(x), float(y))
+
     # -- actions --------------------------------------------------------------------
     def act(
         self,

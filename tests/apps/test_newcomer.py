@@ -264,6 +264,17 @@ def test_a_cold_cache_is_told_from_numba_s_own_index() -> None:
     assert cli._cached(ray_kernel.sense_one) and not cli.kernels_to_compile(env)
 
 
+def test_the_compiled_episode_counts_for_train_only(monkeypatch) -> None:
+    """``train`` with one robot also compiles the episode kernel: its cache is asked."""
+    from koolio_pymunk.learning import episode_kernel
+
+    env = KoolioEnv("room")
+    env.reset(seed=0)
+    cold = {episode_kernel.run_steps}
+    monkeypatch.setattr(cli, "_cached", lambda dispatcher: dispatcher not in cold)
+    assert cli.kernels_to_compile(env, training=True) and not cli.kernels_to_compile(env)
+
+
 # -- 5. flags: whole words only, and a did-you-mean ------------------------------------------
 @pytest.mark.parametrize(
     ("argv", "words"),

@@ -177,7 +177,7 @@ def test_update_and_choose_match_the_learner() -> None:
         reward, terminal = float(rng.normal()), bool(rng.random() < 0.2)
         agent.update(s, a, reward, nxt, terminal)
         shared.reserve(2)
-        update(*shared.args(), 0.3, 0.9, s, a, reward, nxt, terminal)
+        update(shared.index, shared.args(), 0.3, 0.9, s, a, reward, nxt, terminal)
     ref.row(3)[:] = [1.0, 2.0, 2.0, 0.0, 2.0]  # a three-way tie
     shared.sync()
     shared.table.rows[3] = [1.0, 2.0, 2.0, 0.0, 2.0]
@@ -229,13 +229,55 @@ def test_learn_judges_like_the_rules(goal_close: bool, eow: bool, bump: bool) ->
         xy = np.array([inside if eow else (100.0, 100.0)])
         steps, bumps, total, event = (np.zeros(1, np.int64), np.zeros(1, np.int64),
                                       np.zeros(1), np.zeros(1, np.int64))  # fmt: skip
-        r, why = learn(0, np.ones(1, np.bool_), np.array([action]), np.zeros(1, np.int64),
-                       np.ones(1, np.int64), np.array([bump]), np.array([goal_close]), xy,
-                       reward, 0.5, 0.9, zone_arrays(zones), -1, 0, steps, bumps, total,
-                       event, *new_journal(1, 0), *shared.args())  # fmt: skip
+        tick = (
+            np.ones(1, np.bool_),
+            np.array([action]),
+            np.zeros(1, np.int64),
+            np.ones(1, np.int64),
+            np.array([bump]),
+            np.array([goal_close]),
+            xy,
+        )
+        rules = (reward, 0.5, 0.9, zone_arrays(zones), -1, 0)
+        r, why = learn(0, tick, rules, (steps, bumps, total, event), new_journal(1, 0),
+                       shared.index, shared.args())  # fmt: skip
         assert EVENTS[event[0]] == j.event and total[0] == j.reward
         assert (why == 2) == j.terminated and (r, steps[0], bumps[0]) == (
             0 if j.terminated else 1,
             1,
             bump,
         )
+
+
+@pytest.mark.parametrize("arena_name", ["obstacles", "room", "hallway"])
+def test_move_all_moves_every_robot_as_the_pymunk_world_does(arena_name) -> None:
+    """The fleet's compiled moves (each robot in its own copy of the walls) against
+    ``World.act`` on the same actions: positions in the copies, arena positions and
+    headings equal bit for bit, tick after tick."""
+    from koolio_pymunk.learning.fleet_kernel import move_all
+    from koolio_pymunk.world.segment_query import wall_array
+
+    arena = load_arena(arena_name)
+    n = 6
+    w = World.from_arena(arena, R, n_robots=n)
+    rng = np.random.default_rng(11)
+    for i in range(n):
+        w.place(i, arena.start.at, float(rng.uniform(0, 2 * math.pi)))
+    walls = np.stack([wall_array(w, k) for k in range(n)])
+    offsets = np.asarray(w.offsets, dtype=np.float64)
+    copy_xy = np.array([w.copy_position(k) for k in range(n)])
+    headings = np.array(w.heading)
+    xy = np.empty((n, 2))
+    contacts = 0
+    for _ in range(300):
+        actions = rng.integers(5, size=n)
+        actions[rng.random(n) < 0.5] = Action.FORWARD
+        before = copy_xy.copy()
+        w.act([int(a) for a in actions], 12.0, math.radians(30))
+        move_all(actions, copy_xy, headings, walls, offsets, (12.0, math.radians(30), R), xy)
+        for k in range(n):
+            assert tuple(copy_xy[k]) == w.copy_position(k)
+            assert (xy[k, 0], xy[k, 1], headings[k]) == w.pose(k)
+            moved = math.dist(before[k], copy_xy[k])
+            contacts += actions[k] in (Action.FORWARD, Action.REVERSE) and moved < 11.999
+    assert contacts > 20  # the premise: many moves met a wall

@@ -20,6 +20,9 @@ from koolio_pymunk.store.config import load_config
 from koolio_pymunk.task.env import KoolioEnv
 
 CONFIG = "episode: {max_steps: 40}\n"
+#: The pymunk reference sensors: the Python episode loop (a compiled episode of 40 steps
+#: ends before a signal is looked at), so a signal lands inside an episode.
+PYTHON_LOOP = CONFIG + "sensors: {backend: pymunk}\n"
 
 
 def env() -> KoolioEnv:
@@ -94,7 +97,7 @@ def test_a_sigkill_between_saves_resumes_exactly(tmp_path) -> None:
 def test_sigterm_saves_and_stops_like_ctrl_c(tmp_path) -> None:
     """SIGTERM (a scheduler's stop) with a long cadence: the unfinished episode folded in,
     the table saved, the row logged ``interrupted``, exit 130, table and log in step."""
-    (tmp_path / "c.yaml").write_text(CONFIG)
+    (tmp_path / "c.yaml").write_text(PYTHON_LOOP)
     argv = _argv(tmp_path, "t", "--save-every", "1000")
     proc = subprocess.Popen([sys.executable, "-m", "koolio_pymunk", *argv], stderr=subprocess.PIPE)
     _wait_for_rows(tmp_path / "t.csv", 5, proc)
@@ -111,7 +114,7 @@ def test_sigterm_saves_and_stops_like_ctrl_c(tmp_path) -> None:
 def test_exit_without_save_writes_nothing_more(tmp_path, monkeypatch) -> None:
     """Ctrl-C with --discard-unfinished and a long cadence: nothing is written at the
     stop; the file keeps its last save (the log ahead of it, as after a SIGKILL)."""
-    (tmp_path / "c.yaml").write_text(CONFIG)
+    (tmp_path / "c.yaml").write_text(PYTHON_LOOP)
     from koolio_pymunk.task.env import KoolioEnv as Env
 
     calls = {"n": 0}

@@ -66,10 +66,11 @@ def _interrupt_after(monkeypatch, n: int) -> None:
 
 
 def test_ctrl_c_folds_unfinished_episode(tmp_path, monkeypatch) -> None:
+    """The Python loop (the interrupt is raised inside ``simulate``)."""
     q, log, _ = run(tmp_path, "x", 2)
     after_two = load_qtable(q)
     _interrupt_after(monkeypatch, 25)
-    _, _, res = run(tmp_path, "x", 5)
+    _, _, res = run(tmp_path, "x", 5, compiled=False)
     assert res.interrupted
     folded = load_qtable(q)
     assert folded.rows != after_two.rows  # the partial episode's updates were saved
@@ -83,7 +84,7 @@ def test_discard_unfinished_leaves_file_byte_identical(tmp_path, monkeypatch) ->
     before = q.read_bytes()
     log_before = log.read_bytes()
     _interrupt_after(monkeypatch, 25)
-    _, _, res = run(tmp_path, "y", 5, discard_unfinished=True)
+    _, _, res = run(tmp_path, "y", 5, discard_unfinished=True, compiled=False)
     assert res.interrupted
     assert q.read_bytes() == before
     assert log.read_bytes() == log_before

@@ -51,6 +51,24 @@ def test_a_second_ctrl_c_after_the_grace_interrupts_a_stuck_step(monkeypatch):
         assert guard.taken and guard.ignored == 1
 
 
+def test_a_ctrl_c_arriving_inside_the_first_ones_handler_is_not_a_stuck_step(monkeypatch):
+    """Two signals in a row: the second may run the handler before the first one's
+    returns; it must see the first pending since now (not raise as after the grace)."""
+    guard = SafeInterrupt()
+    real = signal.Signals
+    nested: list[int] = []
+
+    def signals(signum):
+        if not nested:
+            nested.append(1)
+            guard._handle(signal.SIGINT, None)  # the second signal, inside the first
+        return real(signum)
+
+    monkeypatch.setattr(interrupts.signal, "Signals", signals)
+    guard._handle(signal.SIGINT, None)
+    assert nested and guard.pending and not guard.taken
+
+
 def test_deferred_runs_the_block_whole_then_interrupts():
     done = []
     with pytest.raises(KeyboardInterrupt), deferred():

@@ -1,0 +1,331 @@
+"""One robot's episode, compiled: act, move, sense, judge, learn, rescue in one numba call.
+
+:class:`CompiledEpisode` runs the steps of an episode of :class:`~.episodes.Episodes`
+(``koolio-pm train``'s loop) without Python between them; Python keeps what happens
+between episodes (the reset and its draws, the agent's episode start, the log row, saving,
+Ctrl-C). :func:`run_steps` is the step of :meth:`Episodes.step` written out, in the same
+order and with the same draws from the same generators (numba's ``np.random.Generator``
+methods draw as numpy's do, from the very generator objects):
+
+1. act: one-step Q's epsilon-greedy choice with the agent's generator
+   (:meth:`QLearner.act <koolio_pymunk.learning.qlearning.QLearner.act>`: one uniform for
+   exploration, one integer for the action or a tie);
+2. move: Forward and Reverse through :func:`koolio_pymunk.world.swept_move.sweep` (the
+   pymunk world's swept move, bit for bit), rotations as :meth:`World.act`; with the
+   realism motion model, :class:`~koolio_pymunk.world.motion_errors.MotionErrors`'s draws
+   and :meth:`World.drive`'s chord;
+3. sense: :func:`~koolio_pymunk.sensing.ray_kernel.sense_one` and
+   :func:`~koolio_pymunk.sensing.encoding_kernel.readout` (or, with realism models on,
+   :func:`~koolio_pymunk.sensing.realism_kernel.sense_realism`) with the env's generator;
+4. judge: ``rules.judge``'s priority (:data:`~.fleet_kernel.EVENTS` codes), a misread
+   plate's ``wrong_door``, the step cap;
+5. learn: Table 11 (:func:`~.fleet_kernel.update` on :class:`~.fleet_kernel.SharedTable`,
+   synced into the Q-table after every call);
+6. rescue: ``rescue.wants_rescue`` and ``rescue_robot``'s reverses and spin, then a new
+   reading.
+
+**What runs here.** One-step Q (``learner.algorithm: q``) learning with a compiled
+sensor backend (``fast``, ``cone``) and no memory in the state, in any world (the realism
+models and domain randomization included: the draw is made at the reset, in Python).
+Anything else runs the Python loop: :func:`why_not` names the reason
+(``Episodes.compiled_reason``).
+
+**Granularity.** A call runs at most ``budget`` steps (:data:`CHUNK`); Python then looks
+for a Ctrl-C (``stop``), so a run without a step cap still stops, between two chunks
+rather than two steps.
+
+``tests/learning/test_episode_kernel.py`` holds seeded runs of this path to the Python
+loop bit for bit (tables and log rows) in the ideal world and in ``koolio-real``;
+``tools/agreement.py --episodes N`` does it for long runs.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numba
+import numpy as np
+
+from ..sensing.encoding_kernel import readout
+from ..sensing.ray_kernel import sense_one
+from ..sensing.realism_kernel import sense_realism
+from ..task.env import WRONG_DOOR, KoolioEnv
+from ..world.segment_query import wall_array
+from ..world.swept_move import sweep
+from .fleet_kernel import (
+    ACTION_EVENT,
+    EVENTS,
+    N_TERMINAL,
+    SharedTable,
+    in_zone,
+    reward_array,
+    zone_arrays,
+)
+from .fleet_kernel import update as td_update
+from .qlearning import QLearner
+
+#: Steps per compiled call at most (Python checks for Ctrl-C between calls).
+CHUNK = 4096
+#: :func:`run_steps`'s outcome codes beyond :data:`EVENTS`' indices.
+RUNNING, WRONG_DOOR_CODE, TRUNCATED_CODE = -1, len(EVENTS), len(EVENTS) + 1
+#: ``ints`` of an episode: state key, steps, bumps, has been rescued, rescued this step.
+I_STATE, I_STEPS, I_BUMPS, I_HAS_BEEN_RESCUED, I_RESCUED = range(5)
+#: ``floats`` of an episode: x, y, heading, return.
+F_X, F_Y, F_H, F_RETURN = range(4)
+_TWO_PI = 2.0 * math.pi  # physics.TWO_PI
+
+
+def why_not(env: KoolioEnv, agent: object, learn: bool = True) -> str | None:
+    """Why ``agent``'s episodes in ``env`` cannot run compiled (None: they can)."""
+    if type(agent) is not QLearner:
+        name = getattr(agent, "name", type(agent).__name__)
+        return f"learner.algorithm {name}: only one-step Q (q) runs compiled"
+    if not learn:
+        return "watching without learning runs the Python loop"
+    if not env.sensors.fused:
+        return f"sensors.backend {env.sensors.backend}: the pymunk reference runs in Python"
+    if env.memory.on:
+        return "sensors.memory: the memory in the state runs in Python"
+    return None
+
+
+@numba.njit(cache=True)
+def _sense(x: float, y: float, h: float, rng, sense: tuple) -> tuple[int, bool, bool]:
+    """``KernelInputs.sense_readout``: the reading's draws from ``rng``, the kernels."""
+    geometry, goal, plates, buffers, encoding, realism, noise, out, codes, flags = sense
+    real_on, gaussian, n_raw, n_draws = flags[0] == 1, flags[1] == 1, flags[2], flags[3]
+    if real_on:
+        if gaussian:
+            noise[:] = rng.standard_normal(n_raw)
+            u = rng.random(n_draws)
+        else:
+            u = rng.random(n_raw + n_draws)
+        return sense_realism(x, y, h, geometry, goal, plates, buffers, noise, u, not gaussian,
+                             realism, encoding, out, codes)  # fmt: skip
+    sense_one(x, y, h, geometry, goal, plates, buffers)
+    draws = rng.standard_normal(n_raw) if gaussian else rng.uniform(-1.0, 1.0, n_raw)
+    return readout(buffers[0], draws, encoding, out, buffers[2], codes)
+
+
+@numba.njit(cache=True)
+def _act(state: int, epsilon: float, arng, n_actions: int, index, q: np.ndarray) -> int:
+    """``QLearner.act``: explore with probability epsilon, else greedy, ties at random."""
+    if epsilon > 0.0 and arng.random() < epsilon:
+        return arng.integers(0, n_actions)
+    i = -1
+    if state in index:
+        i = index[state]
+    if i < 0:
+        return arng.integers(0, n_actions)
+    best = q[i, 0]
+    for a in range(1, n_actions):
+        if q[i, a] > best:
+            best = q[i, a]
+    ties = 0
+    for a in range(n_actions):
+        ties += q[i, a] == best
+    pick = 0 if ties == 1 else arng.integers(0, ties)
+    for a in range(n_actions):
+        if q[i, a] == best:
+            if pick == 0:
+                return a
+            pick -= 1
+    return 0
+
+
+@numba.njit(cache=True)
+def _move(action: int, x: float, y: float, h: float, rng, world: tuple) -> tuple:
+    """``World.act`` (or, with motion errors, ``KoolioEnv._act_with_errors``): the pose
+    after ``action``."""
+    walls, radius, distance, arc, motion = world
+    on, drift, drift_sigma, slip_sigma, turn_sigma = motion
+    if action == 0:
+        return x, y, h
+    if on == 0.0:
+        if action == 1:
+            return x, y, (h + arc) % _TWO_PI
+        if action == 2:
+            return x, y, (h - arc) % _TWO_PI
+        d = distance if action == 3 else -distance
+        x, y = sweep(walls, x, y, d * math.cos(h), d * math.sin(h), radius)
+        return x, y, h
+    if action == 1 or action == 2:
+        turn = arc + turn_sigma * rng.standard_normal() if turn_sigma > 0.0 else arc
+        return x, y, (h + (turn if action == 1 else -turn)) % _TWO_PI
+    sign = 1.0 if action == 3 else -1.0
+    turn = sign * drift
+    if drift_sigma > 0.0 or slip_sigma > 0.0:
+        e = rng.standard_normal(2)
+        turn += drift_sigma * e[0]
+        distance = max(0.0, distance * (1.0 + slip_sigma * e[1]))
+    d = sign * distance
+    if d != 0.0:
+        half = 0.5 * turn
+        chord = d if half == 0.0 else d * (math.sin(half) / half)
+        mid = h + half
+        x, y = sweep(walls, x, y, chord * math.cos(mid), chord * math.sin(mid), radius)
+    return x, y, (h + turn) % _TWO_PI
+
+
+@numba.njit(cache=True)
+def run_steps(
+    budget: int, rng, arng, epsilon: float, sense: tuple, world: tuple, task: tuple,
+    learner: tuple, index, table: tuple, ints: np.ndarray, floats: np.ndarray,
+) -> int:  # fmt: skip
+    """At most ``budget`` steps of one robot's episode (module doc); the episode's state
+    in ``ints`` and ``floats`` (:data:`I_STATE`, :data:`F_X`, ...). Returns the outcome
+    code: an :data:`EVENTS` index that ended it, :data:`WRONG_DOOR_CODE`,
+    :data:`TRUNCATED_CODE`, or :data:`RUNNING` (the budget ran out first).
+
+    ``task`` = ``(rewards by event code, zone_arrays, auto_rescue_toggle,
+    max_steps_before_rescue, rescue_chance, rescue_max_backup, step cap, misread model
+    on)``; ``learner`` =
+    ``(alpha, gamma, n_actions)``; ``world`` = ``(walls, radius, move distance, turn arc,
+    (motion on, drift, drift sigma, slip sigma, turn sigma))``; ``sense`` is built by
+    :meth:`CompiledEpisode.sense_group`."""
+    rewards, zones, auto_rescue, rescue_after, chance, max_backup, cap, misread_on = task
+    alpha, gamma, n_actions = learner
+    walls, radius, distance = world[0], world[1], world[2]
+    discs, disc_radius, points, starts, boxes = zones
+    misread = sense[5][6]
+    q = table[0]
+    state = ints[I_STATE]
+    x, y, h = floats[F_X], floats[F_Y], floats[F_H]
+    outcome = RUNNING
+    for _ in range(budget):
+        action = _act(state, epsilon, arng, n_actions, index, q)
+        x, y, h = _move(action, x, y, h, rng, world)
+        nxt, bump, close = _sense(x, y, h, rng, sense)
+        if action == 0 and close:
+            code = 0
+        elif in_zone(x, y, discs, disc_radius, points, starts, boxes):
+            code = 1
+        elif bump:
+            code = 2
+        else:
+            code = ACTION_EVENT[action]
+        reward = rewards[code]
+        terminated = code < N_TERMINAL
+        ints[I_STEPS] += 1
+        ints[I_BUMPS] += bump
+        floats[F_RETURN] += reward
+        ints[I_RESCUED] = 0
+        steps = ints[I_STEPS]
+        truncated = not terminated and cap > 0 and steps >= cap
+        td_update(index, table, alpha, gamma, state, action, reward, nxt, terminated)
+        state = nxt
+        due = not terminated and auto_rescue and bump and steps > rescue_after
+        if due and rng.random() < chance:  # rescue.wants_rescue: a draw only when due
+            backups = rng.integers(0, max_backup + 1)
+            for _ in range(backups):
+                x, y = sweep(walls, x, y, -distance * math.cos(h), -distance * math.sin(h),
+                             radius)  # fmt: skip
+            h = rng.uniform(0.0, _TWO_PI) % _TWO_PI
+            state = _sense(x, y, h, rng, sense)[0]
+            ints[I_RESCUED] = 1
+            ints[I_HAS_BEEN_RESCUED] = 1
+        if terminated:
+            outcome = WRONG_DOOR_CODE if code == 0 and misread_on and misread[0] else code
+            break
+        if truncated:
+            outcome = TRUNCATED_CODE
+            break
+    ints[I_STATE] = state
+    floats[F_X] = x
+    floats[F_Y] = y
+    floats[F_H] = h
+    return outcome
+
+
+class CompiledEpisode:
+    """The compiled steps of ``env``'s episodes for a one-step Q ``agent`` (module doc)."""
+
+    def __init__(self, env: KoolioEnv, agent: QLearner) -> None:
+        self.env = env
+        self.agent = agent
+        self.shared: SharedTable | None = None
+        self.walls = wall_array(env.world)
+        cfg = env.config
+        rescue = cfg.rescue
+        self.rewards = reward_array(cfg.rewards)
+        self.zones = zone_arrays(env.zones)
+        self.rescue = (
+            bool(rescue.auto_rescue_toggle),
+            int(rescue.max_steps_before_rescue),
+            float(rescue.rescue_chance),
+            int(rescue.rescue_max_backup),
+        )
+        self.ints = np.zeros(5, np.int64)
+        self.floats = np.zeros(4)
+
+    def table(self) -> SharedTable:
+        """The agent's table as arrays, rebuilt if the table changed size behind it."""
+        table = self.agent.table
+        sh = self.shared
+        if sh is None or sh.table is not table or int(sh.count[0]) != len(table.rows):
+            sh = self.shared = SharedTable(table)
+        return sh
+
+    def sense_group(self) -> tuple:
+        """:func:`_sense`'s inputs: the suite's kernel groups and buffers, as configured
+        for this episode (a domain-randomization draw may change them at every reset)."""
+        k = self.env.sensors.kernel
+        flags = np.array(
+            [int(k.real_on), int(k.gaussian), k.n_raw, self.env.sensors.realism.n_draws]
+        )
+        return (k.geometry, k.goal, k.plates, k.buffers, k.encoding, k.realism, k.noise, k.out,
+                k.codes, flags)  # fmt: skip
+
+    def world_group(self) -> tuple:
+        env = self.env
+        m = env.motion
+        motion = (0.0, 0.0, 0.0, 0.0, 0.0)
+        if m is not None:
+            motion = (1.0, m.drift, m.drift_sigma, m.slip_sigma, m.turn_sigma)
+        return (self.walls, env.world.radius, float(env.move_distance), float(env.turn_arc),
+                motion)  # fmt: skip
+
+    def run(self, stop: Callable[[], bool | None] | None = None) -> str | None:
+        """The current episode's steps to its end: its outcome, or None when ``stop``
+        (called between chunks of :data:`CHUNK` steps) asked to stop first. The table
+        holds every update made and the env the counters and the pose, whatever happens."""
+        env, agent = self.env, self.agent
+        sh = self.table()
+        x, y, h = env.world.pose(0)
+        ints, floats = self.ints, self.floats
+        ints[:] = (env.state_key, env.steps, env.bumps, int(env.has_been_rescued), 0)
+        floats[:] = (x, y, h, env.episode_reward)
+        cfg = env.config
+        misread = bool(env.sensors.realism.misread)
+        task = (self.rewards, self.zones, *self.rescue, int(cfg.episode.max_steps), misread)
+        learner = (float(agent.alpha), float(agent.gamma), int(agent.n_actions))
+        sense, world = self.sense_group(), self.world_group()
+        outcome = RUNNING
+        try:
+            while outcome == RUNNING:
+                sh.reserve(CHUNK + 1)
+                outcome = run_steps(CHUNK, env.np_random, agent.rng, float(agent.epsilon),
+                                    sense, world, task, learner, sh.index, sh.args(), ints,
+                                    floats)  # fmt: skip
+                if outcome == RUNNING and stop is not None and stop():
+                    break
+        finally:
+            sh.sync()
+            self._write_back()
+        if outcome == RUNNING:
+            return None
+        if outcome == TRUNCATED_CODE:
+            return "truncated"
+        return WRONG_DOOR if outcome == WRONG_DOOR_CODE else EVENTS[outcome]
+
+    def _write_back(self) -> None:
+        """The env after the steps run: pose, state, counters, the last reading."""
+        ints, floats = self.ints, self.floats
+        x, y, h, total = (float(v) for v in floats)
+        self.env.adopt(
+            (x, y, h),
+            int(ints[I_STATE]),
+            (int(ints[I_STEPS]), int(ints[I_BUMPS]), total),
+            (bool(ints[I_HAS_BEEN_RESCUED]), bool(ints[I_RESCUED])),
+        )

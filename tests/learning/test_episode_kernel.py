@@ -1,0 +1,163 @@
+"""The compiled episode (learning/episode_kernel.py) held to the Python episode loop."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from koolio_pymunk.learning import episode_kernel
+from koolio_pymunk.learning.algorithms import make_learner
+from koolio_pymunk.learning.episode_agreement import compare_episodes
+from koolio_pymunk.learning.episodes import INTERRUPTED, Episodes
+from koolio_pymunk.learning.qtable import QTable, QTableStore
+from koolio_pymunk.learning.training import train
+from koolio_pymunk.store.config import load_config
+from koolio_pymunk.task.env import KoolioEnv
+
+#: Rescues at almost every bump after a few steps: the rescue path runs often.
+EAGER_RESCUE = {
+    "rescue": {"auto_rescue_toggle": True, "max_steps_before_rescue": 3, "rescue_chance": 0.7}
+}
+
+
+@pytest.mark.parametrize(
+    ("arena", "world", "overrides"),
+    [
+        ("hallway", None, {}),
+        ("hallway", "koolio-real", {}),
+        ("hallway", "koolio-real-dr", {}),
+        ("room", None, EAGER_RESCUE),
+        ("obstacles", "koolio-real", EAGER_RESCUE),
+        ("hallway", None, {"sensors": {"noise": {"model": "gaussian"}}}),
+        ("hallway", "koolio-real", {"sensors": {"noise": {"model": "gaussian"}}}),
+        ("room", None, {"sensors": {"backend": "cone"}}),
+    ],
+)
+def test_compiled_episodes_match_the_python_loop(arena, world, overrides):
+    """Row, pose, state and the whole table after every episode, bit for bit."""
+    r = compare_episodes(arena, world, episodes=20, seed=3, max_steps=250, overrides=overrides)
+    assert r.steps > 800  # the premise: episodes of some length ran
+    assert (r.mismatches, r.first_mismatch) == (0, -1)
+
+
+def test_rescues_and_truncations_happen_in_the_compared_runs():
+    """The premise of the eager-rescue cases: rescues and step caps occur."""
+    env = KoolioEnv("room", config=load_config(overrides=EAGER_RESCUE))
+    env.config.episode.max_steps = 250
+    agent = make_learner(QTable(env.layout), env.config.learner, None)
+    loop = Episodes(env, agent, seed=3, compiled=True)
+    assert loop.compiled is not None
+    rescued = outcomes = 0
+    for e in range(6):
+        loop.begin(e)
+        res = loop.run()
+        rescued += res.rescued
+        outcomes += res.outcome == "truncated"
+    assert rescued >= 1 and outcomes >= 1
+
+
+@pytest.mark.parametrize("world", [None, "koolio-real"])
+def test_train_writes_the_same_files_compiled_and_in_python(tmp_path, world):
+    """``train``'s table and log, byte for byte, with either loop."""
+    files = {}
+    for compiled in (True, False):
+        env = KoolioEnv("hallway", config=load_config(world=world), max_steps=300)
+        table, log = tmp_path / f"{compiled}.qtable", tmp_path / f"{compiled}.csv"
+        res = train(env, QTableStore(table), 8, 1, log, report=None, compiled=compiled)
+        assert res.steps > 300
+        files[compiled] = (table.read_bytes(), log.read_bytes())
+    assert files[True] == files[False]
+
+
+@pytest.mark.parametrize(
+    ("overrides", "learn", "reason"),
+    [
+        ({"learner": {"algorithm": "qlambda"}}, True, "learner.algorithm qlambda"),
+        ({"learner": {"algorithm": "dyna"}}, True, "learner.algorithm dyna"),
+        ({"sensors": {"backend": "pymunk"}}, True, "sensors.backend pymunk"),
+        ({"sensors": {"memory": {"goal_camera": True}}}, True, "sensors.memory"),
+        ({}, False, "without learning"),
+    ],
+)
+def test_what_the_compiled_episode_does_not_run_falls_back_to_python(overrides, learn, reason):
+    """The fallback is explicit: the reason is named and the Python steps run."""
+    env = KoolioEnv("room", config=load_config(overrides=overrides), max_steps=20)
+    agent = make_learner(QTable(env.layout), env.config.learner, None)
+    loop = Episodes(env, agent, seed=0, learn=learn, compiled=True)
+    assert loop.compiled is None and reason in str(loop.compiled_reason)
+    loop.begin(0)
+    assert loop.run().steps == 20
+
+
+def test_one_step_q_runs_compiled():
+    env = KoolioEnv("room", max_steps=20)
+    agent = make_learner(QTable(env.layout), env.config.learner, None)
+    loop = Episodes(env, agent, seed=0, compiled=True)
+    assert loop.compiled is not None and loop.compiled_reason is None
+    assert Episodes(env, agent, seed=0).compiled is None  # the Python loop unless asked
+
+
+def test_stop_between_chunks_interrupts_with_the_updates_kept(monkeypatch):
+    """``stop`` is asked between chunks; the steps made are in the table and the env,
+    as the Python loop leaves them after the same number of steps."""
+    monkeypatch.setattr(episode_kernel, "CHUNK", 7)
+    runs = {}
+    for compiled in (True, False):
+        env = KoolioEnv("hallway", max_steps=0)
+        table = QTable(env.layout, {}, env.config.learner.q_init)
+        agent = make_learner(table, env.config.learner, None)
+        loop = Episodes(env, agent, seed=2, compiled=compiled)
+        loop.begin(0)
+        calls: list[int] = []
+        last = 3 if compiled else 21  # 21 steps either way
+
+        def stop(calls=calls, last=last):
+            calls.append(1)
+            return len(calls) >= last
+
+        res = loop.run(stop)
+        runs[compiled] = (res.row(), env.world.pose(0), env.state_key, table.rows)
+    assert runs[True][0][4] == INTERRUPTED and runs[True][0][2] == "21"
+    assert runs[True] == runs[False]
+
+
+def test_the_generators_continue_as_the_python_loop_leaves_them():
+    """After a compiled episode the env's and the agent's generators are where the
+    Python steps leave them (the next draws agree)."""
+    draws = {}
+    for compiled in (True, False):
+        env = KoolioEnv("room", max_steps=60)
+        agent = make_learner(QTable(env.layout), env.config.learner, None)
+        loop = Episodes(env, agent, seed=5, compiled=compiled)
+        loop.begin(0)
+        loop.run()
+        draws[compiled] = (env.np_random.random(), agent.rng.random(), env.readings.sonar)
+    assert draws[True][:2] == draws[False][:2]
+    assert np.array_equal(draws[True][2], draws[False][2])
+
+
+def test_ctrl_c_in_a_compiled_run_stops_between_episodes(tmp_path, monkeypatch):
+    """A Ctrl-C during compiled episodes takes effect after the episode (shorter than a
+    chunk): every logged episode is finished and saved, the table and log in step."""
+    import os
+    import signal
+
+    from koolio_pymunk.learning import training
+    from koolio_pymunk.learning.qtable import load_qtable
+
+    real = training.RunFiles.finished
+
+    def finished(self, res, save=False):
+        real(self, res, save)
+        if res.episode == 3:
+            os.kill(os.getpid(), signal.SIGINT)
+
+    monkeypatch.setattr(training.RunFiles, "finished", finished)
+    env = KoolioEnv("room", max_steps=40)
+    q, log = tmp_path / "c.qtable", tmp_path / "c.csv"
+    res = train(env, QTableStore(q), 10, 0, log, report=None)
+    assert res.interrupted and res.episodes_run == 4
+    rows = log.read_text().splitlines()[1:]
+    assert [r.split(",")[0] for r in rows] == ["0", "1", "2", "3"]
+    assert "interrupted" not in log.read_text()
+    assert int(load_qtable(q).meta["episodes"]) == 4
