@@ -4,8 +4,8 @@ Three targets (each a multi-seed measurement; nothing here is timed):
 
 * ``paper``: the ``paper`` profile on the default delivery: train up to ``--paper-episodes``
   (3,000) episodes, a 100-episode greedy evaluation every ``--paper-every`` (250); the
-  target is >= 90 % greedy goal rate for every seed 0-4 within the budget. Issue 18's
-  targets too: the kept best table (``train --eval-every``) scores >= 95 % on a fresh
+  target is >= 90 % greedy goal rate for every seed 0-4 within the budget. Two
+  more targets: the kept best table (``train --eval-every``) scores >= 95 % on a fresh
   ``--fresh-episodes`` (200) episode evaluation, and the last third of the checks never
   falls below 85 %, for every seed.
 * ``default``: the default profile, episodes to competence (>= 90 % of a 100-episode greedy
