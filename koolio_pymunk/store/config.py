@@ -58,8 +58,7 @@ class RobotConfig:
     """Robot profile: ``koolio`` (20 in diameter) or ``tjpro`` (17 cm)."""
     robot_radius: float | None = None
     """``RobotRadius`` in inches, in [0.5, 60]; None takes the profile's radius (Koolio 10,
-    TJ Pro 3.35). A robot 10 ft across would not fit the paper's hallway, and a move
-    (at most the diameter) is driven in 0.25-inch sub-steps."""
+    TJ Pro 3.35). A robot 10 ft across would not fit the paper's hallway."""
 
     @property
     def radius(self) -> float:

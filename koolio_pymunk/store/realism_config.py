@@ -84,8 +84,8 @@ class MotionRealism:
     slip_sigma: float = 0.0
     """Standard deviation of the distance error per move, a fraction of the move, in
     [0, 0.5]: a slip of a few per cent is realistic (``koolio-real``: 2 %); 0.5 is a robot
-    whose moves often halve or double. (A slip of 1e6 once made one move a million inches
-    driven in 0.25-inch sub-steps: ``train`` hung.)"""
+    whose moves often halve or double. (A slip of 1e6 once made one move a million inches,
+    which hung ``train`` when a move was driven in 0.25-inch sub-steps.)"""
     turn_sigma_deg: float = 0.0
     """Standard deviation of the rotation error per turn, degrees, in [0, 30] (a turn's
     own size: ``koolio-real`` 1.5, 5 % of a 30 degree turn)."""

@@ -15,8 +15,7 @@ coordinate             -1,000,000 to 1,000,000 in   the simulator's own limit (2
                                                     beyond any building); a file the editor
                                                     writes must load in the simulator
 snap step              0.01 to 1,000 in             0.01 in is the editor's resolution (snap
-                                                    off); the robot moves in 0.25 in
-                                                    sub-steps and its sonars resolve about an
+                                                    off); the robot's sonars resolve about an
                                                     inch, so finer positions only add digits
 grid (tile)            1 to 1,000 in                finer lines than 1 in say nothing on a
                                                     building floor (the snap step gives finer
