@@ -20,8 +20,8 @@ Sections (each printed as a table row, all written to ``--out`` as JSON):
   compiled move (``swept_move.move``) called from Python, and per move inside one
   compiled loop;
 * **algorithms**: the fast single-robot loop with each ``learner.algorithm`` (one-step Q
-  compiled and in the Python loop, Q(lambda) and Dyna-Q with its default
-  ``planning_steps``, which run the Python loop), the same number of steps from an empty
+  and Q(lambda) compiled and in the Python loop, Dyna-Q with its default
+  ``planning_steps``, which runs the Python loop), the same number of steps from an empty
   table in this one run: the cost per step and its ratio to compiled one-step Q's;
 * **time to competence**, per seed: default ``koolio-pm train`` (hallway, default
   config), a greedy evaluation of 100 episodes after every ``--check-every`` episodes,
@@ -139,9 +139,10 @@ def learning_loop(
 
 def algorithms(min_steps: int) -> dict:
     """Each learning algorithm in the fast loop; cost per step and ratio to one-step Q
-    (compiled; ``q-python``: one-step Q in the Python loop)."""
+    (compiled where it runs compiled; ``q-python``, ``qlambda-python``: in the Python
+    loop)."""
     out = {}
-    for name in ("q", "q-python", "qlambda", "dyna"):
+    for name in ("q", "q-python", "qlambda", "qlambda-python", "dyna"):
         algo = name.removesuffix("-python")
         r = learning_loop("fast", min_steps, seed=0, algorithm=algo, compiled=name == algo)
         r["us_per_step_cpu"] = round(1e6 * r["cpu_s"] / max(1, r["steps"]), 2)
