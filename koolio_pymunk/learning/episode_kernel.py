@@ -16,7 +16,10 @@ methods draw as numpy's do, from the very generator objects):
    and :meth:`World.drive`'s chord;
 3. sense: :func:`~koolio_pymunk.sensing.ray_kernel.sense_one` and
    :func:`~koolio_pymunk.sensing.encoding_kernel.readout` (or, with realism models on,
-   :func:`~koolio_pymunk.sensing.realism_kernel.sense_realism`) with the env's generator;
+   :func:`~koolio_pymunk.sensing.realism_kernel.sense_realism`) with the env's generator,
+   then the memory's update and codes when it is on (:func:`_remember`; the env's
+   :class:`~koolio_pymunk.sensing.memory.Memory` is read before and written after every
+   call);
 4. judge: ``rules.judge``'s priority (:data:`~.fleet_kernel.EVENTS` codes), a misread
    plate's ``wrong_door``, the step cap;
 5. learn: Table 11 (:func:`~.fleet_kernel.update` on :class:`~.fleet_kernel.SharedTable`,
@@ -29,9 +32,11 @@ methods draw as numpy's do, from the very generator objects):
 (``qlambda``: :func:`lambda_update`, :class:`~koolio_pymunk.learning.qlambda.QLambda`'s
 replacing traces, its cut at a non-greedy exploratory action and at a step that does not
 start where the last one ended, its cutoff) learning with a compiled sensor backend
-(``fast``, ``cone``) and no memory in the state, in any world (the realism models and
-domain randomization included: the draw is made at the reset, in Python). Anything else
-runs the Python loop: :func:`why_not` names the reason (``Episodes.compiled_reason``).
+(``fast``, ``cone``), with or without a memory in the state (``sensors.memory``:
+:func:`_remember` is :class:`~koolio_pymunk.sensing.memory.Memory`'s update and key), in
+any world (the realism models and domain randomization included: the draw is made at the
+reset, in Python). Anything else (Dyna-Q, the pymunk reference, watching) runs the
+Python loop: :func:`why_not` names the reason (``Episodes.compiled_reason``).
 
 **Granularity.** A call runs at most ``budget`` steps (:data:`CHUNK`); Python then looks
 for a Ctrl-C (``stop``), so a run without a step cap still stops, between two chunks
@@ -39,7 +44,7 @@ rather than two steps.
 
 ``tests/learning/test_episode_kernel.py`` holds seeded runs of this path to the Python
 loop bit for bit (tables and log rows) in the ideal world and in ``koolio-real``, with
-one-step Q and Q(lambda);
+one-step Q and Q(lambda), with and without the memory;
 ``tools/agreement.py --episodes N`` does it for long runs.
 """
 
@@ -92,8 +97,6 @@ def why_not(env: KoolioEnv, agent: object, learn: bool = True) -> str | None:
         return "watching without learning runs the Python loop"
     if not env.sensors.fused:
         return f"sensors.backend {env.sensors.backend}: the pymunk reference runs in Python"
-    if env.memory.on:
-        return "sensors.memory: the memory in the state runs in Python"
     return None
 
 
@@ -140,6 +143,46 @@ def _act(state: int, epsilon: float, arng, n_actions: int, index, q: np.ndarray)
                 return a, False
             pick -= 1
     return 0, False
+
+
+@numba.njit(cache=True)
+def _sighting(out: np.ndarray, first: int, memory: tuple, held: int, age: int, moved: bool):
+    """``Memory._sighting``: the camera that sees the target nearest (``out[first:]``, the
+    cameras' readings), else the held one aged by a move of the robot's own."""
+    n_camera, far, forget = memory[1], memory[2], memory[3]
+    best, best_d = 0, far
+    for c in range(n_camera):
+        d = out[first + c]
+        if d < best_d:
+            best, best_d = 1 + c, d
+    if best:
+        return best, 0
+    if not moved or not held:
+        return held, age
+    age += 1
+    if forget > 0 and age >= forget:
+        return 0, 0
+    return held, age
+
+
+@numba.njit(cache=True)
+def _remember(key: int, action: int, out: np.ndarray, memory: tuple, mem: np.ndarray) -> int:
+    """``Memory.update`` after a reading (``action`` -1: a rescue's, no move of the
+    robot's own) and ``Memory.key``: the state key with the memory's codes after
+    ``key``. ``mem`` = goal, end of world, action, goal's age, end of world's age;
+    ``memory`` = ``(n_sonar, n_camera, far, forget_after, fields on, their bits)``."""
+    n_sonar, n_camera, on, bits = memory[0], memory[1], memory[4], memory[5]
+    moved = action >= 0
+    mem[0], mem[3] = _sighting(out, n_sonar, memory, mem[0], mem[3], moved)
+    mem[1], mem[4] = _sighting(out, n_sonar + n_camera, memory, mem[1], mem[4], moved)
+    if moved:
+        mem[2] = 1 + action
+    k = 0
+    for field in range(3):
+        if on[field]:
+            key = (key << bits[k]) | mem[field]
+            k += 1
+    return key
 
 
 @numba.njit(cache=True)
@@ -238,7 +281,7 @@ def _move(action: int, x: float, y: float, h: float, rng, world: tuple) -> tuple
 def run_steps(
     budget: int, rng, arng, epsilon: float, sense: tuple, world: tuple, task: tuple,
     learner: tuple, index, table: tuple, ints: np.ndarray, floats: np.ndarray,
-    lam: tuple, traces: tuple,
+    lam: tuple, traces: tuple, memory: tuple, mem: np.ndarray,
 ) -> int:  # fmt: skip
     """At most ``budget`` steps of one robot's episode (module doc); the episode's state
     in ``ints`` and ``floats`` (:data:`I_STATE`, :data:`F_X`, ...). Returns the outcome
@@ -249,7 +292,8 @@ def run_steps(
     max_steps_before_rescue, rescue_chance, rescue_max_backup, step cap, misread model
     on)``; ``learner`` =
     ``(alpha, gamma, n_actions)``; ``lam`` = ``(Q(lambda) on, gamma * lambda, trace
-    cutoff)`` with its ``traces`` (:func:`lambda_update`); ``world`` = ``(walls, radius,
+    cutoff)`` with its ``traces`` (:func:`lambda_update`); ``memory`` (empty fields: off)
+    and ``mem`` are :func:`_remember`'s; ``world`` = ``(walls, radius,
     move distance, turn arc, (motion on, drift, drift sigma, slip sigma, turn sigma))``;
     ``sense`` is built by :meth:`CompiledEpisode.sense_group`."""
     rewards, zones, auto_rescue, rescue_after, chance, max_backup, cap, misread_on = task
@@ -262,6 +306,7 @@ def run_steps(
     x, y, h = floats[F_X], floats[F_Y], floats[F_H]
     outcome = RUNNING
     lambda_on, t_meta = lam[0], traces[3]
+    memory_on, out = len(memory[5]) > 0, sense[7]
     for _ in range(budget):
         if lambda_on and state != t_meta[1]:  # not where the last step ended: no traces
             t_meta[0] = 0
@@ -270,6 +315,8 @@ def run_steps(
             t_meta[0] = 0  # Watkins's cut
         x, y, h = _move(action, x, y, h, rng, world)
         nxt, bump, close = _sense(x, y, h, rng, sense)
+        if memory_on:
+            nxt = _remember(nxt, action, out, memory, mem)
         if action == 0 and close:
             code = 0
         elif in_zone(x, y, discs, disc_radius, points, starts, boxes):
@@ -300,6 +347,8 @@ def run_steps(
                              radius)  # fmt: skip
             h = rng.uniform(0.0, _TWO_PI) % _TWO_PI
             state = _sense(x, y, h, rng, sense)[0]
+            if memory_on:
+                state = _remember(state, -1, out, memory, mem)
             ints[I_RESCUED] = 1
             ints[I_HAS_BEEN_RESCUED] = 1
         if terminated:
@@ -349,6 +398,8 @@ class CompiledEpisode:
         if isinstance(agent, QLambda):
             self.lam = (True, float(agent.decay), float(agent.cutoff))
         self.traces = _empty_traces(0)
+        self.memory = self._memory_group()
+        self.mem = np.zeros(5, np.int64)
 
     def table(self) -> SharedTable:
         """The agent's table as arrays, rebuilt if the table changed size behind it."""
@@ -394,24 +445,48 @@ class CompiledEpisode:
         sense, world = self.sense_group(), self.world_group()
         outcome = RUNNING
         self._traces_in(sh)
+        self._memory_in()
         try:
             while outcome == RUNNING:
                 sh.reserve(CHUNK + 1)
                 self._trace_room(sh)
                 outcome = run_steps(CHUNK, env.np_random, agent.rng, float(agent.epsilon),
                                     sense, world, task, learner, sh.index, sh.args(), ints,
-                                    floats, self.lam, self.traces)  # fmt: skip
+                                    floats, self.lam, self.traces, self.memory,
+                                    self.mem)  # fmt: skip
                 if outcome == RUNNING and stop is not None and stop():
                     break
         finally:
             sh.sync()
             self._write_back()
             self._traces_out(sh)
+            self._memory_out()
         if outcome == RUNNING:
             return None
         if outcome == TRUNCATED_CODE:
             return "truncated"
         return WRONG_DOOR if outcome == WRONG_DOOR_CODE else EVENTS[outcome]
+
+    def _memory_group(self) -> tuple:
+        """:func:`_remember`'s configuration: no fields when the memory is off."""
+        env = self.env
+        cfg = env.memory.cfg
+        on = np.array([cfg.goal_camera, cfg.eow_camera, cfg.previous_action], np.bool_)
+        bits = np.array(env.layout.bits[len(env.sensors.levels) :], np.int64)
+        if not env.memory.on:
+            bits = bits[:0]
+        sensors = env.sensors
+        return (int(sensors.n_sonar), int(sensors.n_camera), float(sensors.far),
+                int(cfg.forget_after), on, bits)  # fmt: skip
+
+    def _memory_in(self) -> None:
+        m = self.env.memory
+        self.mem[:] = (m.goal, m.eow, m.action, m._goal_age, m._eow_age)
+
+    def _memory_out(self) -> None:
+        """The memory as the Python steps leave it (``env.codes`` reads it)."""
+        m = self.env.memory
+        m.goal, m.eow, m.action, m._goal_age, m._eow_age = (int(v) for v in self.mem)
 
     def _traces_in(self, sh: SharedTable) -> None:
         """Q(lambda)'s traces and expected state from the agent (empty at an episode's

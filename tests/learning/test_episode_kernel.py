@@ -23,6 +23,24 @@ EAGER_RESCUE = {
 #: Q(lambda) as configured by default, and with traces that live hundreds of steps.
 QLAMBDA = {"learner": {"algorithm": "qlambda"}}
 LONG_TRACES = {"learner": {"algorithm": "qlambda", "trace_decay": 1.0, "trace_cutoff": 1e-6}}
+#: The ``paper-memory`` profile's sensors (side cameras at +-90, the goal camera and the
+#: action in the state), and every memory field with sightings forgotten after 3 steps.
+PAPER_MEMORY = {
+    "sensors": {
+        "camera": {"camera_sensors_deg": [0.0, 90.0, -90.0]},
+        "memory": {"goal_camera": True, "previous_action": True},
+    }
+}
+EVERY_MEMORY = {
+    "sensors": {
+        "memory": {
+            "goal_camera": True,
+            "eow_camera": True,
+            "previous_action": True,
+            "forget_after": 3,
+        }
+    }
+}
 
 
 @pytest.mark.parametrize(
@@ -39,6 +57,9 @@ LONG_TRACES = {"learner": {"algorithm": "qlambda", "trace_decay": 1.0, "trace_cu
         ("hallway", None, QLAMBDA),
         ("room", None, {**QLAMBDA, **EAGER_RESCUE}),
         ("hallway", "koolio-real", LONG_TRACES),
+        ("hallway", None, PAPER_MEMORY),
+        ("room", "koolio-real", {**EVERY_MEMORY, **EAGER_RESCUE}),
+        ("hallway", None, {**PAPER_MEMORY, **QLAMBDA}),
     ],
 )
 def test_compiled_episodes_match_the_python_loop(arena, world, overrides):
@@ -64,12 +85,20 @@ def test_rescues_and_truncations_happen_in_the_compared_runs():
     assert rescued >= 1 and outcomes >= 1
 
 
-@pytest.mark.parametrize(("world", "overrides"), [(None, {}), ("koolio-real", {}), (None, QLAMBDA)])
-def test_train_writes_the_same_files_compiled_and_in_python(tmp_path, world, overrides):
+@pytest.mark.parametrize(
+    ("name", "world", "overrides"),
+    [
+        (None, None, {}),
+        (None, "koolio-real", {}),
+        (None, None, QLAMBDA),
+        ("paper-memory", None, {}),
+    ],
+)
+def test_train_writes_the_same_files_compiled_and_in_python(tmp_path, name, world, overrides):
     """``train``'s table and log, byte for byte, with either loop."""
     files = {}
     for compiled in (True, False):
-        cfg = load_config(world=world, overrides=overrides)
+        cfg = load_config(name, world=world, overrides=overrides)
         env = KoolioEnv("hallway", config=cfg, max_steps=300)
         table, log = tmp_path / f"{compiled}.qtable", tmp_path / f"{compiled}.csv"
         res = train(env, QTableStore(table), 8, 1, log, report=None, compiled=compiled)
@@ -83,7 +112,6 @@ def test_train_writes_the_same_files_compiled_and_in_python(tmp_path, world, ove
     [
         ({"learner": {"algorithm": "dyna"}}, True, "learner.algorithm dyna"),
         ({"sensors": {"backend": "pymunk"}}, True, "sensors.backend pymunk"),
-        ({"sensors": {"memory": {"goal_camera": True}}}, True, "sensors.memory"),
         ({}, False, "without learning"),
     ],
 )
@@ -140,6 +168,25 @@ def test_qlambda_stopped_between_chunks_leaves_the_traces_of_the_python_steps(
         runs[compiled] = (res.row(), env.state_key, table.rows, traces, agent._expect)
     assert len(runs[False][3]) > 1  # the premise: several entries traced
     assert runs[True] == runs[False]
+
+
+def test_the_memory_runs_compiled_and_is_left_as_the_python_steps_leave_it():
+    """The premise of the memory cases: ``paper-memory`` runs compiled, its keys hold the
+    memory's codes, and after an episode the env's memory (``env.codes``) is the Python
+    loop's."""
+    runs = {}
+    for compiled in (True, False):
+        env = KoolioEnv("hallway", config=load_config(overrides=EVERY_MEMORY), max_steps=150)
+        agent = make_learner(QTable(env.layout), env.config.learner, None)
+        loop = Episodes(env, agent, seed=6, compiled=compiled)
+        assert (loop.compiled is not None) == compiled
+        loop.begin(0)
+        loop.run()
+        m = env.memory
+        runs[compiled] = (env.codes, m.goal, m.eow, m.action, m._goal_age, m._eow_age)
+        runs[compiled] += (env.state_key, sorted(agent.table.rows))
+    assert runs[True] == runs[False]
+    assert runs[True][3] > 0  # an action remembered
 
 
 def test_one_step_q_runs_compiled():
