@@ -451,7 +451,7 @@ def test_unknown_world_profile_is_one_line_exit_2(capsys) -> None:
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [
         "koolio-pm: error: koolio-rael: no such profile (did you mean 'koolio-real'?) "
-        "(profiles: koolio-real, koolio-real-dr, paper; a file name ends in .yaml)"
+        "(profiles: koolio-real, koolio-real-dr, paper, paper-memory; a file name ends in .yaml)"
     ]
     with pytest.raises(ConfigError):
         load_config(world="koolio-rael")
