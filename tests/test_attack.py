@@ -372,7 +372,7 @@ def _fail_call(monkeypatch, target, name: str, err: int, after: int = 0) -> None
 
 def test_disk_full_during_training_stops_with_the_last_good_table(work, capsys, monkeypatch):
     good = load_qtable(work / "q.qtable").meta["episodes"]
-    _fail_call(monkeypatch, files_mod.os, "fsync", errno.ENOSPC, after=8)  # 2 per save
+    _fail_call(monkeypatch, files_mod.os, "fsync", errno.ENOSPC, after=8)  # 1 a save (2 the first)
     code, _, err = run_cli(capsys, *TRAIN, "--qtable", "q.qtable", "--log", "q.csv",
                            "--episodes", "50")  # fmt: skip
     monkeypatch.setattr(files_mod.os, "fsync", os.fsync)

@@ -20,7 +20,8 @@ started touching one, and the smallest clearance to a wall after a move. ``--pos
 skips the sensors.
 
 ``--episodes N`` also trains ``N`` seeded episodes of the hallway in each world
-(``--worlds``) twice, the Python episode loop and the compiled episode
+(``--worlds``) with each learner (``--algorithms``: one-step Q and Q(lambda), those that
+run compiled) twice, the Python episode loop and the compiled episode
 (``koolio_pymunk.learning.episode_agreement``), and counts the episodes after which the
 log row, the pose, the state or the Q-table differ in any bit (exit 1 if any).
 
@@ -77,27 +78,36 @@ def run_moves(moves: int, seed: int = 0, jobs: int = 2, generated: int = 4) -> l
         return [f.result() for f in futures]
 
 
-def one_episodes(world: str, episodes: int, seed: int) -> dict:
+def one_episodes(world: str, episodes: int, seed: int, algorithm: str = "q") -> dict:
     from koolio_pymunk.learning.episode_agreement import compare_episodes
 
     laid = None if world == IDEAL else world
-    return compare_episodes("hallway", laid, episodes, seed).as_dict()
+    over = {"learner": {"algorithm": algorithm}}
+    out = compare_episodes("hallway", laid, episodes, seed, overrides=over).as_dict()
+    return {"algorithm": algorithm, **out}
 
 
-def run_episodes(episodes: int, seed: int, jobs: int, worlds: tuple[str, ...]) -> list[dict]:
-    """Compiled-episode agreement figures per world (a list of dicts)."""
+def run_episodes(
+    episodes: int, seed: int, jobs: int, worlds: tuple[str, ...], algorithms: tuple[str, ...]
+) -> list[dict]:
+    """Compiled-episode agreement figures per world and algorithm (a list of dicts)."""
     with ProcessPoolExecutor(max_workers=jobs) as pool:
-        futures = [pool.submit(one_episodes, w, episodes, seed) for w in worlds]
+        futures = [
+            pool.submit(one_episodes, w, episodes, seed, a) for a in algorithms for w in worlds
+        ]
         return [f.result() for f in futures]
 
 
 def print_episodes(rows: list[dict]) -> None:
     print("compiled episode vs the Python episode loop (rows, poses, tables, bit for bit):")
-    print(f"{'world':>12} {'episodes':>9} {'steps':>10} {'mismatches':>11} {'states':>7} {'s':>6}")
+    print(
+        f"{'algorithm':>9} {'world':>12} {'episodes':>9} {'steps':>10} {'mismatches':>11} "
+        f"{'states':>7} {'s':>6}"
+    )
     for r in rows:
         print(
-            f"{r['world']:>12} {r['episodes']:>9} {r['steps']:>10} {r['mismatches']:>11} "
-            f"{r['states']:>7} {r['seconds']:>6}"
+            f"{r['algorithm']:>9} {r['world']:>12} {r['episodes']:>9} {r['steps']:>10} "
+            f"{r['mismatches']:>11} {r['states']:>7} {r['seconds']:>6}"
         )
 
 
@@ -167,6 +177,12 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument(
         "--episodes", type=int, default=0, help="training episodes per world, the episode (0)"
     )
+    p.add_argument(
+        "--algorithms",
+        nargs="+",
+        default=["q", "qlambda"],
+        help="learner.algorithm of the --episodes runs (q qlambda: those that run compiled)",
+    )
     p.add_argument("--out", default=None, help="write the figures as JSON here")
     args = p.parse_args(argv)
     rows, moves, episodes = [], [], []
@@ -177,7 +193,9 @@ def main(argv: list[str] | None = None) -> int:
         moves = run_moves(args.moves, args.seed, args.jobs, args.generated)
         print_moves(moves)
     if args.episodes:
-        episodes = run_episodes(args.episodes, args.seed, args.jobs, tuple(args.worlds))
+        episodes = run_episodes(
+            args.episodes, args.seed, args.jobs, tuple(args.worlds), tuple(args.algorithms)
+        )
         print_episodes(episodes)
     if args.out:
         out: object = rows

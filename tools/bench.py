@@ -11,17 +11,20 @@ Sections (each printed as a table row, all written to ``--out`` as JSON):
 * **koolio-real**: the same compiled loop in the realistic world (``--world
   koolio-real``: every realism model on), next to the ideal world's row above: steps per
   second and the ratio to the ideal world;
+* **paper-memory**: the compiled loop and the Python loop with ``--config paper-memory``
+  (the goal camera and the last action remembered in the state);
 * **train (end to end)**: :func:`training.train` as ``koolio-pm train`` runs it (the
-  compiled episode), saving the table (file + backup, fsynced) and the log at every
-  episode end, then with ``save_every`` 100 (``--save-every 100``);
+  compiled episode), saving the table (the file written and fsynced, the replaced one
+  kept as the backup) and the log at every episode end, then with ``save_every`` 100
+  (``--save-every 100``);
 * **N robots**: :func:`multi.train_many` with ``--robots`` robots, robot-steps per second;
 * **motion**: the cost of one 12-inch move from the same seeded random free poses of the
   hallway (near a wall: within 12 in of one): the pymunk world's (``World.move``), the
   compiled move (``swept_move.move``) called from Python, and per move inside one
   compiled loop;
 * **algorithms**: the fast single-robot loop with each ``learner.algorithm`` (one-step Q
-  compiled and in the Python loop, Q(lambda) and Dyna-Q with its default
-  ``planning_steps``, which run the Python loop), the same number of steps from an empty
+  and Q(lambda) compiled and in the Python loop, Dyna-Q with its default
+  ``planning_steps``, which runs the Python loop), the same number of steps from an empty
   table in this one run: the cost per step and its ratio to compiled one-step Q's;
 * **time to competence**, per seed: default ``koolio-pm train`` (hallway, default
   config), a greedy evaluation of 100 episodes after every ``--check-every`` episodes,
@@ -88,12 +91,18 @@ def rates(steps: int, t: Timer) -> dict:
     }
 
 
-def make_env(backend: str, arena: str = "hallway", world: str | None = None, algorithm: str = "q"):
+def make_env(
+    backend: str,
+    arena: str = "hallway",
+    world: str | None = None,
+    algorithm: str = "q",
+    config: str | None = None,
+):
     from koolio_pymunk.store.config import load_config
     from koolio_pymunk.task.env import KoolioEnv
 
     overrides = {"sensors": {"backend": backend}, "learner": {"algorithm": algorithm}}
-    return KoolioEnv(arena, config=load_config(overrides=overrides, world=world))
+    return KoolioEnv(arena, config=load_config(config, overrides=overrides, world=world))
 
 
 def learning_loop(
@@ -103,6 +112,7 @@ def learning_loop(
     world: str | None = None,
     algorithm: str = "q",
     compiled: bool = True,
+    config: str | None = None,
 ) -> dict:
     """The training loop of ``train`` without file I/O, for at least ``min_steps`` steps
     (``compiled`` False: the Python episode loop; True: the compiled episode where the
@@ -113,14 +123,14 @@ def learning_loop(
     from koolio_pymunk.learning.episodes import Episodes
     from koolio_pymunk.learning.qtable import QTable
 
-    env = make_env(backend, world=world, algorithm=algorithm)
+    env = make_env(backend, world=world, algorithm=algorithm, config=config)
     table = QTable(env.layout, {}, env.config.learner.q_init)
     agent = make_learner(table, env.config.learner, np.random.default_rng(seed))
     env.reset(seed=0)
     env.transition(0)  # compile / warm up
     loop = Episodes(env, agent, seed, compiled=compiled)
     if loop.compiled is not None:  # compile / warm up the episode kernel on a copy
-        warm = make_env(backend, world=world, algorithm=algorithm)
+        warm = make_env(backend, world=world, algorithm=algorithm, config=config)
         other = make_learner(QTable(warm.layout), warm.config.learner, None)
         w = Episodes(warm, other, seed, compiled=True)
         w.begin(0)
@@ -139,9 +149,10 @@ def learning_loop(
 
 def algorithms(min_steps: int) -> dict:
     """Each learning algorithm in the fast loop; cost per step and ratio to one-step Q
-    (compiled; ``q-python``: one-step Q in the Python loop)."""
+    (compiled where it runs compiled; ``q-python``, ``qlambda-python``: in the Python
+    loop)."""
     out = {}
-    for name in ("q", "q-python", "qlambda", "dyna"):
+    for name in ("q", "q-python", "qlambda", "qlambda-python", "dyna"):
         algo = name.removesuffix("-python")
         r = learning_loop("fast", min_steps, seed=0, algorithm=algo, compiled=name == algo)
         r["us_per_step_cpu"] = round(1e6 * r["cpu_s"] / max(1, r["steps"]), 2)
@@ -312,7 +323,7 @@ def step_costs(poses: int, step_us: float, repeats: int = 3) -> dict:
     @numba.njit
     def learning(keys, rewards, arng, index, table):
         for i in range(keys.shape[0] - 1):
-            a = _act(keys[i], 0.15, arng, 5, index, table[0])
+            a = _act(keys[i], 0.15, arng, 5, index, table[0])[0]
             update(index, table, 0.2, 0.9, keys[i], a, rewards[i], keys[i + 1], False)
 
     env = make_env("fast")
@@ -572,6 +583,15 @@ def main(argv: list[str] | None = None) -> int:
         real["ratio_to_ideal_cpu"] = round(real_ratio, 3)
         real["ratio_to_ideal_wall"] = round(real["per_wall_s"] / max(1, fast["per_wall_s"]), 3)
         print(table_line("koolio-real world steps/s", real, f"{real_ratio:.0%} of ideal (CPU)"))
+        mem = learning_loop("fast", 60_000 if q else 150_000, config="paper-memory")
+        mem_py = learning_loop(
+            "fast", 30_000 if q else 60_000, compiled=False, config="paper-memory"
+        )
+        mem_gain = mem["per_cpu_s"] / max(1, mem_py["per_cpu_s"])
+        mem["ratio_to_python_loop_cpu"] = round(mem_gain, 2)
+        mem["ratio_to_ideal_cpu"] = round(mem["per_cpu_s"] / max(1, fast["per_cpu_s"]), 3)
+        print(table_line("paper-memory, compiled steps/s", mem, f"x{mem_gain:.2f} Python loop"))
+        print(table_line("paper-memory, Python loop steps/s", mem_py))
         e2e = end_to_end(100 if q else 600, folder)
         print(table_line("train end to end (saves) steps/s", e2e))
         e2e100 = end_to_end(200 if q else 1_200, folder, save_every=100)
@@ -583,6 +603,8 @@ def main(argv: list[str] | None = None) -> int:
             fast=fast,
             python_loop=python,
             koolio_real=real,
+            paper_memory=mem,
+            paper_memory_python_loop=mem_py,
             end_to_end=e2e,
             end_to_end_save_every_100=e2e100,
             many=multi,

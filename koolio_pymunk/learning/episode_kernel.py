@@ -16,26 +16,35 @@ methods draw as numpy's do, from the very generator objects):
    and :meth:`World.drive`'s chord;
 3. sense: :func:`~koolio_pymunk.sensing.ray_kernel.sense_one` and
    :func:`~koolio_pymunk.sensing.encoding_kernel.readout` (or, with realism models on,
-   :func:`~koolio_pymunk.sensing.realism_kernel.sense_realism`) with the env's generator;
+   :func:`~koolio_pymunk.sensing.realism_kernel.sense_realism`) with the env's generator,
+   then the memory's update and codes when it is on (:func:`_remember`; the env's
+   :class:`~koolio_pymunk.sensing.memory.Memory` is read before and written after every
+   call);
 4. judge: ``rules.judge``'s priority (:data:`~.fleet_kernel.EVENTS` codes), a misread
    plate's ``wrong_door``, the step cap;
 5. learn: Table 11 (:func:`~.fleet_kernel.update` on :class:`~.fleet_kernel.SharedTable`,
-   synced into the Q-table after every call);
+   synced into the Q-table after every call), or Q(lambda)'s traced update
+   (:func:`lambda_update`; the traces go back into the agent after every call);
 6. rescue: ``rescue.wants_rescue`` and ``rescue_robot``'s reverses and spin, then a new
    reading.
 
-**What runs here.** One-step Q (``learner.algorithm: q``) learning with a compiled
-sensor backend (``fast``, ``cone``) and no memory in the state, in any world (the realism
-models and domain randomization included: the draw is made at the reset, in Python).
-Anything else runs the Python loop: :func:`why_not` names the reason
-(``Episodes.compiled_reason``).
+**What runs here.** One-step Q (``learner.algorithm: q``) and Watkins's Q(lambda)
+(``qlambda``: :func:`lambda_update`, :class:`~koolio_pymunk.learning.qlambda.QLambda`'s
+replacing traces, its cut at a non-greedy exploratory action and at a step that does not
+start where the last one ended, its cutoff) learning with a compiled sensor backend
+(``fast``, ``cone``), with or without a memory in the state (``sensors.memory``:
+:func:`_remember` is :class:`~koolio_pymunk.sensing.memory.Memory`'s update and key), in
+any world (the realism models and domain randomization included: the draw is made at the
+reset, in Python). Anything else (Dyna-Q, the pymunk reference, watching) runs the
+Python loop: :func:`why_not` names the reason (``Episodes.compiled_reason``).
 
 **Granularity.** A call runs at most ``budget`` steps (:data:`CHUNK`); Python then looks
 for a Ctrl-C (``stop``), so a run without a step cap still stops, between two chunks
 rather than two steps.
 
 ``tests/learning/test_episode_kernel.py`` holds seeded runs of this path to the Python
-loop bit for bit (tables and log rows) in the ideal world and in ``koolio-real``;
+loop bit for bit (tables and log rows) in the ideal world and in ``koolio-real``, with
+one-step Q and Q(lambda), with and without the memory;
 ``tools/agreement.py --episodes N`` does it for long runs.
 """
 
@@ -58,11 +67,14 @@ from .fleet_kernel import (
     EVENTS,
     N_TERMINAL,
     SharedTable,
+    _find,
+    _row,
     in_zone,
     reward_array,
     zone_arrays,
 )
 from .fleet_kernel import update as td_update
+from .qlambda import QLambda
 from .qlearning import QLearner
 
 #: Steps per compiled call at most (Python checks for Ctrl-C between calls).
@@ -78,15 +90,13 @@ _TWO_PI = 2.0 * math.pi  # physics.TWO_PI
 
 def why_not(env: KoolioEnv, agent: object, learn: bool = True) -> str | None:
     """Why ``agent``'s episodes in ``env`` cannot run compiled (None: they can)."""
-    if type(agent) is not QLearner:
+    if type(agent) not in (QLearner, QLambda):
         name = getattr(agent, "name", type(agent).__name__)
-        return f"learner.algorithm {name}: only one-step Q (q) runs compiled"
+        return f"learner.algorithm {name}: only one-step Q (q) and Q(lambda) run compiled"
     if not learn:
         return "watching without learning runs the Python loop"
     if not env.sensors.fused:
         return f"sensors.backend {env.sensors.backend}: the pymunk reference runs in Python"
-    if env.memory.on:
-        return "sensors.memory: the memory in the state runs in Python"
     return None
 
 
@@ -109,15 +119,16 @@ def _sense(x: float, y: float, h: float, rng, sense: tuple) -> tuple[int, bool, 
 
 
 @numba.njit(cache=True)
-def _act(state: int, epsilon: float, arng, n_actions: int, index, q: np.ndarray) -> int:
-    """``QLearner.act``: explore with probability epsilon, else greedy, ties at random."""
+def _act(state: int, epsilon: float, arng, n_actions: int, index, q: np.ndarray) -> tuple:
+    """``QLearner.act``: explore with probability epsilon, else greedy, ties at random.
+    Returns the action and whether it was the exploratory choice."""
     if epsilon > 0.0 and arng.random() < epsilon:
-        return arng.integers(0, n_actions)
+        return arng.integers(0, n_actions), True
     i = -1
     if state in index:
         i = index[state]
     if i < 0:
-        return arng.integers(0, n_actions)
+        return arng.integers(0, n_actions), False
     best = q[i, 0]
     for a in range(1, n_actions):
         if q[i, a] > best:
@@ -129,9 +140,107 @@ def _act(state: int, epsilon: float, arng, n_actions: int, index, q: np.ndarray)
     for a in range(n_actions):
         if q[i, a] == best:
             if pick == 0:
-                return a
+                return a, False
             pick -= 1
-    return 0
+    return 0, False
+
+
+@numba.njit(cache=True)
+def _sighting(out: np.ndarray, first: int, memory: tuple, held: int, age: int, moved: bool):
+    """``Memory._sighting``: the camera that sees the target nearest (``out[first:]``, the
+    cameras' readings), else the held one aged by a move of the robot's own."""
+    n_camera, far, forget = memory[1], memory[2], memory[3]
+    best, best_d = 0, far
+    for c in range(n_camera):
+        d = out[first + c]
+        if d < best_d:
+            best, best_d = 1 + c, d
+    if best:
+        return best, 0
+    if not moved or not held:
+        return held, age
+    age += 1
+    if forget > 0 and age >= forget:
+        return 0, 0
+    return held, age
+
+
+@numba.njit(cache=True)
+def _remember(key: int, action: int, out: np.ndarray, memory: tuple, mem: np.ndarray) -> int:
+    """``Memory.update`` after a reading (``action`` -1: a rescue's, no move of the
+    robot's own) and ``Memory.key``: the state key with the memory's codes after
+    ``key``. ``mem`` = goal, end of world, action, goal's age, end of world's age;
+    ``memory`` = ``(n_sonar, n_camera, far, forget_after, fields on, their bits)``."""
+    n_sonar, n_camera, on, bits = memory[0], memory[1], memory[4], memory[5]
+    moved = action >= 0
+    mem[0], mem[3] = _sighting(out, n_sonar, memory, mem[0], mem[3], moved)
+    mem[1], mem[4] = _sighting(out, n_sonar + n_camera, memory, mem[1], mem[4], moved)
+    if moved:
+        mem[2] = 1 + action
+    k = 0
+    for field in range(3):
+        if on[field]:
+            key = (key << bits[k]) | mem[field]
+            k += 1
+    return key
+
+
+@numba.njit(cache=True)
+def _not_greedy(index, q: np.ndarray, state: int, action: int) -> bool:
+    """``QLambda.explore``'s cut: ``action`` is below the best of ``state``'s row (a
+    state never visited has no row: no cut)."""
+    if state not in index:
+        return False
+    i = index[state]
+    best = q[i, 0]
+    for a in range(1, q.shape[1]):
+        if q[i, a] > best:
+            best = q[i, a]
+    return q[i, action] < best
+
+
+@numba.njit(cache=True)
+def lambda_update(
+    index, table: tuple, alpha: float, gamma: float, state: int, action: int, reward: float,
+    nxt: int, terminal: bool, lam: tuple, traces: tuple,
+) -> None:  # fmt: skip
+    """``QLambda.observe``: the TD error of Table 11's target, the replacing trace of
+    ``(state, action)``, every traced entry moved by it and decayed, those below the
+    cutoff dropped (in order: the Python dict's order). ``traces`` = ``(rows, actions,
+    e, meta)``: the traced entries by table row, ``meta[0]`` their count, ``meta[1]`` the
+    state the next step is expected to start from (-1: none)."""
+    q, dirty, q_init = table[0], table[2], table[4]
+    decay, cutoff = lam[1], lam[2]
+    t_row, t_act, t_e, meta = traces
+    i = _row(index, table, state)
+    if terminal:
+        target = reward
+    else:
+        j = _find(index, nxt)
+        target = reward + gamma * (q[j].max() if j >= 0 else q_init)
+    step = alpha * (target - q[i, action])
+    n = meta[0]
+    k = 0
+    while k < n and t_row[k] != i:
+        k += 1
+    t_row[k] = i
+    t_act[k] = action
+    t_e[k] = 1.0
+    if k == n:
+        n += 1
+    kept = 0
+    for k in range(n):
+        r = t_row[k]
+        q[r, t_act[k]] += step * t_e[k]
+        dirty[r] = True
+        e = t_e[k] * decay
+        if not e < cutoff:
+            t_row[kept] = r
+            t_act[kept] = t_act[k]
+            t_e[kept] = e
+            kept += 1
+    meta[0] = kept
+    meta[1] = -1 if terminal else nxt
 
 
 @numba.njit(cache=True)
@@ -172,6 +281,7 @@ def _move(action: int, x: float, y: float, h: float, rng, world: tuple) -> tuple
 def run_steps(
     budget: int, rng, arng, epsilon: float, sense: tuple, world: tuple, task: tuple,
     learner: tuple, index, table: tuple, ints: np.ndarray, floats: np.ndarray,
+    lam: tuple, traces: tuple, memory: tuple, mem: np.ndarray,
 ) -> int:  # fmt: skip
     """At most ``budget`` steps of one robot's episode (module doc); the episode's state
     in ``ints`` and ``floats`` (:data:`I_STATE`, :data:`F_X`, ...). Returns the outcome
@@ -181,9 +291,11 @@ def run_steps(
     ``task`` = ``(rewards by event code, zone_arrays, auto_rescue_toggle,
     max_steps_before_rescue, rescue_chance, rescue_max_backup, step cap, misread model
     on)``; ``learner`` =
-    ``(alpha, gamma, n_actions)``; ``world`` = ``(walls, radius, move distance, turn arc,
-    (motion on, drift, drift sigma, slip sigma, turn sigma))``; ``sense`` is built by
-    :meth:`CompiledEpisode.sense_group`."""
+    ``(alpha, gamma, n_actions)``; ``lam`` = ``(Q(lambda) on, gamma * lambda, trace
+    cutoff)`` with its ``traces`` (:func:`lambda_update`); ``memory`` (empty fields: off)
+    and ``mem`` are :func:`_remember`'s; ``world`` = ``(walls, radius,
+    move distance, turn arc, (motion on, drift, drift sigma, slip sigma, turn sigma))``;
+    ``sense`` is built by :meth:`CompiledEpisode.sense_group`."""
     rewards, zones, auto_rescue, rescue_after, chance, max_backup, cap, misread_on = task
     alpha, gamma, n_actions = learner
     walls, radius, distance = world[0], world[1], world[2]
@@ -193,10 +305,18 @@ def run_steps(
     state = ints[I_STATE]
     x, y, h = floats[F_X], floats[F_Y], floats[F_H]
     outcome = RUNNING
+    lambda_on, t_meta = lam[0], traces[3]
+    memory_on, out = len(memory[5]) > 0, sense[7]
     for _ in range(budget):
-        action = _act(state, epsilon, arng, n_actions, index, q)
+        if lambda_on and state != t_meta[1]:  # not where the last step ended: no traces
+            t_meta[0] = 0
+        action, explored = _act(state, epsilon, arng, n_actions, index, q)
+        if lambda_on and explored and _not_greedy(index, q, state, action):
+            t_meta[0] = 0  # Watkins's cut
         x, y, h = _move(action, x, y, h, rng, world)
         nxt, bump, close = _sense(x, y, h, rng, sense)
+        if memory_on:
+            nxt = _remember(nxt, action, out, memory, mem)
         if action == 0 and close:
             code = 0
         elif in_zone(x, y, discs, disc_radius, points, starts, boxes):
@@ -213,7 +333,11 @@ def run_steps(
         ints[I_RESCUED] = 0
         steps = ints[I_STEPS]
         truncated = not terminated and cap > 0 and steps >= cap
-        td_update(index, table, alpha, gamma, state, action, reward, nxt, terminated)
+        if lambda_on:
+            lambda_update(index, table, alpha, gamma, state, action, reward, nxt, terminated,
+                          lam, traces)  # fmt: skip
+        else:
+            td_update(index, table, alpha, gamma, state, action, reward, nxt, terminated)
         state = nxt
         due = not terminated and auto_rescue and bump and steps > rescue_after
         if due and rng.random() < chance:  # rescue.wants_rescue: a draw only when due
@@ -223,6 +347,8 @@ def run_steps(
                              radius)  # fmt: skip
             h = rng.uniform(0.0, _TWO_PI) % _TWO_PI
             state = _sense(x, y, h, rng, sense)[0]
+            if memory_on:
+                state = _remember(state, -1, out, memory, mem)
             ints[I_RESCUED] = 1
             ints[I_HAS_BEEN_RESCUED] = 1
         if terminated:
@@ -236,6 +362,16 @@ def run_steps(
     floats[F_Y] = y
     floats[F_H] = h
     return outcome
+
+
+def _empty_traces(capacity: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`lambda_update`'s traces: none, room for ``capacity``, no expected state."""
+    return (
+        np.zeros(capacity, np.int64),
+        np.zeros(capacity, np.int64),
+        np.zeros(capacity, np.float64),
+        np.array([0, -1], np.int64),
+    )
 
 
 class CompiledEpisode:
@@ -258,6 +394,12 @@ class CompiledEpisode:
         )
         self.ints = np.zeros(5, np.int64)
         self.floats = np.zeros(4)
+        self.lam = (False, 0.0, 0.0)
+        if isinstance(agent, QLambda):
+            self.lam = (True, float(agent.decay), float(agent.cutoff))
+        self.traces = _empty_traces(0)
+        self.memory = self._memory_group()
+        self.mem = np.zeros(5, np.int64)
 
     def table(self) -> SharedTable:
         """The agent's table as arrays, rebuilt if the table changed size behind it."""
@@ -302,22 +444,87 @@ class CompiledEpisode:
         learner = (float(agent.alpha), float(agent.gamma), int(agent.n_actions))
         sense, world = self.sense_group(), self.world_group()
         outcome = RUNNING
+        self._traces_in(sh)
+        self._memory_in()
         try:
             while outcome == RUNNING:
                 sh.reserve(CHUNK + 1)
+                self._trace_room(sh)
                 outcome = run_steps(CHUNK, env.np_random, agent.rng, float(agent.epsilon),
                                     sense, world, task, learner, sh.index, sh.args(), ints,
-                                    floats)  # fmt: skip
+                                    floats, self.lam, self.traces, self.memory,
+                                    self.mem)  # fmt: skip
                 if outcome == RUNNING and stop is not None and stop():
                     break
         finally:
             sh.sync()
             self._write_back()
+            self._traces_out(sh)
+            self._memory_out()
         if outcome == RUNNING:
             return None
         if outcome == TRUNCATED_CODE:
             return "truncated"
         return WRONG_DOOR if outcome == WRONG_DOOR_CODE else EVENTS[outcome]
+
+    def _memory_group(self) -> tuple:
+        """:func:`_remember`'s configuration: no fields when the memory is off."""
+        env = self.env
+        cfg = env.memory.cfg
+        on = np.array([cfg.goal_camera, cfg.eow_camera, cfg.previous_action], np.bool_)
+        bits = np.array(env.layout.bits[len(env.sensors.levels) :], np.int64)
+        if not env.memory.on:
+            bits = bits[:0]
+        sensors = env.sensors
+        return (int(sensors.n_sonar), int(sensors.n_camera), float(sensors.far),
+                int(cfg.forget_after), on, bits)  # fmt: skip
+
+    def _memory_in(self) -> None:
+        m = self.env.memory
+        self.mem[:] = (m.goal, m.eow, m.action, m._goal_age, m._eow_age)
+
+    def _memory_out(self) -> None:
+        """The memory as the Python steps leave it (``env.codes`` reads it)."""
+        m = self.env.memory
+        m.goal, m.eow, m.action, m._goal_age, m._eow_age = (int(v) for v in self.mem)
+
+    def _traces_in(self, sh: SharedTable) -> None:
+        """Q(lambda)'s traces and expected state from the agent (empty at an episode's
+        start), by table row."""
+        if not self.lam[0]:
+            return
+        agent: QLambda = self.agent  # type: ignore[assignment]
+        self.traces = _empty_traces(sh.q.shape[0])
+        rows, acts, e, meta = self.traces
+        for k, (state, (action, trace)) in enumerate(agent.traces.items()):
+            rows[k], acts[k], e[k] = sh.row_of(state), action, trace
+        meta[0] = len(agent.traces)
+        meta[1] = -1 if agent._expect is None else agent._expect
+
+    def _trace_room(self, sh: SharedTable) -> None:
+        """Room for a trace on every row the table may reach in the next chunk (with a
+        small cutoff and lambda 1 a trace lives hundreds of steps)."""
+        if not self.lam[0] or len(self.traces[0]) >= sh.q.shape[0]:
+            return
+        old = self.traces
+        self.traces = _empty_traces(sh.q.shape[0])
+        n = int(old[3][0])
+        for new, was in zip(self.traces[:3], old[:3]):
+            new[:n] = was[:n]
+        self.traces[3][:] = old[3]
+
+    def _traces_out(self, sh: SharedTable) -> None:
+        """The traces back into the agent, in their order, as its own steps leave them."""
+        if not self.lam[0]:
+            return
+        agent: QLambda = self.agent  # type: ignore[assignment]
+        rows, acts, e, meta = self.traces
+        n = int(meta[0])
+        agent.traces = {
+            int(sh.keys[r]): [int(a), float(v)]
+            for r, a, v in zip(rows[:n].tolist(), acts[:n].tolist(), e[:n].tolist())
+        }
+        agent._expect = None if meta[1] < 0 else int(meta[1])
 
     def _write_back(self) -> None:
         """The env after the steps run: pose, state, counters, the last reading."""

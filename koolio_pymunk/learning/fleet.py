@@ -43,7 +43,7 @@ without a new episode to start stand still.
 **Saving.** The table is written (file + backup, as :func:`training.train` does) each
 time ``save_every`` more episodes have finished (default ``N``: about once per round of
 episodes rather than at every episode end, because N robots finish episodes N times as
-often and every save is two fsynced file writes), and always at the end and on Ctrl-C.
+often and every save is an fsynced file write), and always at the end and on Ctrl-C.
 ``save_every=1`` is the paper's cadence. Each finished episode's row is logged when it
 finishes, so after a SIGKILL the log may be ahead of the table by up to ``save_every - 1``
 rows: resuming removes them (:mod:`koolio_pymunk.store.episode_log`).

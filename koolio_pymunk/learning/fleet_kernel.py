@@ -97,6 +97,10 @@ class SharedTable:
             rows[int(self.keys[i])] = self.q[i].tolist()
         self.dirty[:] = False
 
+    def row_of(self, key: int) -> int:
+        """The row of state ``key`` (-1: none)."""
+        return int(_find(self.index, key))
+
     def args(self) -> tuple:
         """The kernels' table group ``(q, keys, dirty, count, q_init)``; the typed dict
         :attr:`index` goes beside it (a tuple holding a typed dict costs numba's slow

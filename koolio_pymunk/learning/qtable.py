@@ -54,7 +54,9 @@ repeat episode numbers for ever. The store holds the table's lock
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import json
+import os
 import struct
 import sys
 import zlib
@@ -67,7 +69,14 @@ import numpy as np
 from ..robot_runtime import MAX_Q, is_number, nonfinite_item
 from ..store.config import Config, MemoryConfig, load_config, profile_names, state_fields
 from ..store.errors import FileError, KoolioError, QTableError, located
-from ..store.files import atomic_write, read_bytes, remove_stale_temps
+from ..store.files import (
+    atomic_link,
+    atomic_write,
+    identity,
+    read_bytes,
+    remove_stale_temps,
+    staged_write,
+)
 from ..store.keyword import MAX_ACTIONS, MAX_KEYWORD_BITS, MAX_LEVELS, KeywordLayout
 from ..store.locks import FileLock
 from .dyna_model import SECTION, Model
@@ -140,10 +149,7 @@ class QTable:
         if blobs:
             header["sections"] = [[name, len(blob)] for name, blob in blobs]
         hjson = json.dumps(header, sort_keys=True, separators=(",", ":")).encode()
-        keys = np.fromiter(sorted(self.rows), dtype="<u8", count=len(self.rows))
-        values = np.array([self.rows[int(k)] for k in keys], dtype="<f8").reshape(
-            len(keys), self.layout.n_actions
-        )
+        keys, values = self._arrays()
         body = b"".join(
             [
                 MAGIC,
@@ -156,6 +162,16 @@ class QTable:
             ]
         )
         return body + struct.pack("<I", zlib.crc32(body))
+
+    def _arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        """The state keys ascending and their rows, as the file holds them (read from the
+        dict in one pass each, then put in key order)."""
+        n, na = len(self.rows), self.layout.n_actions
+        keys = np.fromiter(self.rows, dtype="<u8", count=n)
+        flat = itertools.chain.from_iterable(self.rows.values())
+        values = np.fromiter(flat, dtype="<f8", count=n * na).reshape(n, na)
+        order = np.argsort(keys)
+        return keys[order], values[order]
 
     @classmethod
     def from_bytes(cls, data: bytes, source: str = "<bytes>") -> QTable:
@@ -342,10 +358,11 @@ class QTableStore:
     """A Q-table file and its backup (``<file>.bak``), as the paper keeps them.
 
     :meth:`open` locks the table (one writer at a time), reads it (creating both files
-    empty when missing); :meth:`save` writes the previous good table to the backup and
-    the new one to the file, each atomically; :meth:`close` releases the lock. ``open``
-    is :meth:`load` then, for a new table, :meth:`create`: a caller that must check
-    something before any file is written (the training log) calls them itself.
+    empty when missing); :meth:`save` writes the new table, makes the previous good one
+    the backup, then puts the new one in place, each step atomic and one fsync in all;
+    :meth:`close` releases the lock. ``open`` is :meth:`load` then, for a new table,
+    :meth:`create`: a caller that must check something before any file is written (the
+    training log) calls them itself.
     """
 
     def __init__(self, path: str | Path, warn=None, purpose: str = "koolio-pm") -> None:
@@ -353,6 +370,9 @@ class QTableStore:
         self.backup = backup_path(self.path)
         self._warn = warn or (lambda msg: print(f"warning: {msg}", file=sys.stderr))
         self._last: bytes | None = None
+        self._written: tuple[int, int, int, int] | None = None
+        """:func:`~koolio_pymunk.store.files.identity` of the table file this store wrote
+        last (None: none yet)."""
         self._lock = FileLock(self.path, purpose)
         self.fresh = False
         """True when :meth:`load` found no table (a new one starts at episode 0)."""
@@ -416,13 +436,13 @@ class QTableStore:
         without the lock and without writing; None when there is none yet. A reader
         (``eval``) or a check before the lock is taken. Warns of a fallback to the
         backup only with ``warn``; an unusable table raises as in :meth:`load`."""
-        saved, last = self._warn, self._last
+        saved, last, written = self._warn, self._last, self._written
         if not warn:
             self._warn = lambda msg: None
         try:
             return self._load_existing()
         finally:
-            self._warn, self._last = saved, last
+            self._warn, self._last, self._written = saved, last, written
 
     def exists(self) -> bool:
         """True when the table file or its backup exists (a run would resume it)."""
@@ -432,18 +452,34 @@ class QTableStore:
         """Write a new table to the file and the backup."""
         self.lock()
         self._last = table.to_bytes()
-        atomic_write(self.path, self._last)
-        atomic_write(self.backup, self._last)
+        with staged_write(self.path, self._last) as written:
+            pass
+        self._written = identity(written)
+        self._keep_backup()
         self.fresh = False
 
     def save(self, table: QTable) -> None:
-        """Write ``table``: the previous good table goes to the backup first."""
+        """Write ``table``: the previous good table becomes the backup once the new one is
+        on disk, before it replaces the file (:meth:`_keep_backup`)."""
         self.lock()
         data = table.to_bytes()
-        if self._last is not None and self._last != data:
-            atomic_write(self.backup, self._last)
-        atomic_write(self.path, data)
+        with staged_write(self.path, data) as written:
+            if self._last is not None and self._last != data:
+                self._keep_backup()
+        self._written = identity(written)
         self._last = data
+
+    def _keep_backup(self) -> None:
+        """Make the backup hold the previous good table (``_last``): the table file itself
+        given the backup's name (a hard link: no second write, no second fsync) when it is
+        the file this store wrote, unchanged since; its bytes written otherwise (a table
+        read from disk, a torn one replaced by its backup, a file system without links)."""
+        try:
+            same = identity(os.lstat(self.path)) == self._written
+        except OSError:
+            same = False
+        if not (same and atomic_link(self.path, self.backup)):
+            atomic_write(self.backup, self._last)
 
     def close(self) -> None:
         """Release the lock (the files stay as last saved)."""
@@ -483,7 +519,7 @@ class QTableStore:
                 ) from None
             why = main_err if main_err is not None else f"{self.path}: missing"
             self._warn(f"{why}; using the backup {self.backup}")
-            self._last = data
+            self._last, self._written = data, None  # the file does not hold _last
             return table
         if main_err is not None:
             raise main_err

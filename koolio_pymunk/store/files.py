@@ -8,6 +8,12 @@ the middle of a write (SIGKILL, power loss) leaves its temporary file behind: th
 write of the same target removes the temporary files of processes that no longer run
 (:func:`remove_stale_temps`).
 
+**Backups without a second write.** :func:`staged_write` is the same write with a step
+between the fsync and the rename, and :func:`atomic_link` gives a file a second name
+atomically (a hard link under a temporary name, renamed): the file about to be replaced
+becomes its backup there, its bytes already on disk, with no second write and no second
+fsync (:class:`~koolio_pymunk.learning.qtable.QTableStore`).
+
 **Reading.** Every input file (arenas, configurations, worlds, door tables, logs, sweep
 specs, Q-tables, policies, editor scripts) is read by :func:`read_bytes` /
 :func:`read_text`: opened without blocking (``O_NONBLOCK``: opening a FIFO for reading
@@ -46,9 +52,11 @@ import contextlib
 import errno
 import os
 import re
+import secrets
 import stat
 import sys
 import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 
 from .errors import FileError, located
@@ -122,13 +130,21 @@ def atomic_write(path: str | Path, data: bytes, make_parents: bool = True) -> No
 
     The target keeps its permissions (a new file gets what ``open()`` would give it).
     """
-    path = check_path(path)
-    if path.is_dir():
-        raise FileError(located(_name(path), "", "cannot write: is a folder, not a file"))
-    _check_target(path)
-    if make_parents:
-        make_parent(path)
-    remove_stale_temps(path)
+    with staged_write(path, data, make_parents):
+        pass
+
+
+@contextlib.contextmanager
+def staged_write(
+    path: str | Path, data: bytes, make_parents: bool = True
+) -> Iterator[os.stat_result]:
+    """:func:`atomic_write` in two stages: ``data`` is written to the temporary file and
+    fsynced on entry, and renamed over ``path`` when the block ends without an exception
+    (an exception removes the temporary file and leaves ``path`` as it was). Yields the
+    temporary file's ``fstat``: the target's :func:`identity` once renamed. The block
+    runs between the two: a backup of the file about to be replaced is made there
+    (:func:`atomic_link`), after the new data is safely on disk."""
+    path = _writable(path, make_parents)
     mode = _mode_for(path)
     try:
         fd, tmp = tempfile.mkstemp(
@@ -142,6 +158,8 @@ def atomic_write(path: str | Path, data: bytes, make_parents: bool = True) -> No
             fh.flush()
             os.fchmod(fh.fileno(), mode)
             os.fsync(fh.fileno())
+            written = os.fstat(fh.fileno())
+        yield written
         os.replace(tmp, path)
     except BaseException as exc:
         with contextlib.suppress(OSError):
@@ -149,6 +167,63 @@ def atomic_write(path: str | Path, data: bytes, make_parents: bool = True) -> No
         if isinstance(exc, OSError):
             raise file_error(path, "write", exc) from None
         raise
+
+
+def _writable(path: str | Path, make_parents: bool) -> Path:
+    """``path`` checked as the target of an atomic write (not a folder, a FIFO, a device
+    or a socket), its folder made, the stale temporary files of its writes removed."""
+    path = check_path(path)
+    if path.is_dir():
+        raise FileError(located(_name(path), "", "cannot write: is a folder, not a file"))
+    _check_target(path)
+    if make_parents:
+        make_parent(path)
+    remove_stale_temps(path)
+    return path
+
+
+def identity(st: os.stat_result) -> tuple[int, int, int, int]:
+    """What tells one file from another, and a file from itself after it changed: device,
+    inode, size, modification time (ns). A file whose identity is the one recorded when
+    it was written still holds what was written (every write is atomic: a new inode)."""
+    return (st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns)
+
+
+def atomic_link(src: str | Path, dst: str | Path) -> bool:
+    """Make ``dst`` another name of the file ``src`` atomically (a hard link made under a
+    temporary name, then renamed over ``dst``): ``dst`` then holds ``src``'s bytes
+    without writing them again. ``dst`` is checked as :func:`atomic_write` checks its
+    target (:class:`FileError`: a FIFO, a device, a socket, a folder; a failed rename).
+
+    Returns False, changing nothing, when a link cannot stand for a copy written by
+    :func:`atomic_write`: the file system has no hard links (or refuses this one), or
+    ``dst`` would get other permissions than a written copy (its own, or a new file's).
+    The caller then writes the copy. True when ``dst`` is already ``src``'s file.
+    """
+    dst = _writable(dst, True)
+    try:
+        st = os.stat(src)
+    except OSError:
+        return False
+    with contextlib.suppress(OSError):
+        if os.path.samestat(st, os.stat(dst)):
+            return True  # renaming a name onto another name of its file does nothing
+    if st.st_mode & 0o7777 != _mode_for(dst):
+        return False
+    tmp = dst.parent / f".{dst.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp"
+    try:
+        os.link(src, tmp)
+    except OSError:
+        return False
+    try:
+        os.replace(tmp, dst)
+    except BaseException as exc:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        if isinstance(exc, OSError):
+            raise file_error(dst, "write", exc) from None
+        raise
+    return True
 
 
 def _check_target(path: Path) -> None:

@@ -20,6 +20,29 @@ EAGER_RESCUE = {
 }
 
 
+#: Q(lambda) as configured by default, and with traces that live hundreds of steps.
+QLAMBDA = {"learner": {"algorithm": "qlambda"}}
+LONG_TRACES = {"learner": {"algorithm": "qlambda", "trace_decay": 1.0, "trace_cutoff": 1e-6}}
+#: The ``paper-memory`` profile's sensors (side cameras at +-90, the goal camera and the
+#: action in the state), and every memory field with sightings forgotten after 3 steps.
+PAPER_MEMORY = {
+    "sensors": {
+        "camera": {"camera_sensors_deg": [0.0, 90.0, -90.0]},
+        "memory": {"goal_camera": True, "previous_action": True},
+    }
+}
+EVERY_MEMORY = {
+    "sensors": {
+        "memory": {
+            "goal_camera": True,
+            "eow_camera": True,
+            "previous_action": True,
+            "forget_after": 3,
+        }
+    }
+}
+
+
 @pytest.mark.parametrize(
     ("arena", "world", "overrides"),
     [
@@ -31,6 +54,12 @@ EAGER_RESCUE = {
         ("hallway", None, {"sensors": {"noise": {"model": "gaussian"}}}),
         ("hallway", "koolio-real", {"sensors": {"noise": {"model": "gaussian"}}}),
         ("room", None, {"sensors": {"backend": "cone"}}),
+        ("hallway", None, QLAMBDA),
+        ("room", None, {**QLAMBDA, **EAGER_RESCUE}),
+        ("hallway", "koolio-real", LONG_TRACES),
+        ("hallway", None, PAPER_MEMORY),
+        ("room", "koolio-real", {**EVERY_MEMORY, **EAGER_RESCUE}),
+        ("hallway", None, {**PAPER_MEMORY, **QLAMBDA}),
     ],
 )
 def test_compiled_episodes_match_the_python_loop(arena, world, overrides):
@@ -56,12 +85,21 @@ def test_rescues_and_truncations_happen_in_the_compared_runs():
     assert rescued >= 1 and outcomes >= 1
 
 
-@pytest.mark.parametrize("world", [None, "koolio-real"])
-def test_train_writes_the_same_files_compiled_and_in_python(tmp_path, world):
+@pytest.mark.parametrize(
+    ("name", "world", "overrides"),
+    [
+        (None, None, {}),
+        (None, "koolio-real", {}),
+        (None, None, QLAMBDA),
+        ("paper-memory", None, {}),
+    ],
+)
+def test_train_writes_the_same_files_compiled_and_in_python(tmp_path, name, world, overrides):
     """``train``'s table and log, byte for byte, with either loop."""
     files = {}
     for compiled in (True, False):
-        env = KoolioEnv("hallway", config=load_config(world=world), max_steps=300)
+        cfg = load_config(name, world=world, overrides=overrides)
+        env = KoolioEnv("hallway", config=cfg, max_steps=300)
         table, log = tmp_path / f"{compiled}.qtable", tmp_path / f"{compiled}.csv"
         res = train(env, QTableStore(table), 8, 1, log, report=None, compiled=compiled)
         assert res.steps > 300
@@ -72,10 +110,8 @@ def test_train_writes_the_same_files_compiled_and_in_python(tmp_path, world):
 @pytest.mark.parametrize(
     ("overrides", "learn", "reason"),
     [
-        ({"learner": {"algorithm": "qlambda"}}, True, "learner.algorithm qlambda"),
         ({"learner": {"algorithm": "dyna"}}, True, "learner.algorithm dyna"),
         ({"sensors": {"backend": "pymunk"}}, True, "sensors.backend pymunk"),
-        ({"sensors": {"memory": {"goal_camera": True}}}, True, "sensors.memory"),
         ({}, False, "without learning"),
     ],
 )
@@ -87,6 +123,70 @@ def test_what_the_compiled_episode_does_not_run_falls_back_to_python(overrides, 
     assert loop.compiled is None and reason in str(loop.compiled_reason)
     loop.begin(0)
     assert loop.run().steps == 20
+
+
+def test_qlambda_runs_compiled_and_learns_otherwise_than_one_step_q():
+    """The premise of the Q(lambda) cases: its compiled episodes take the traced update
+    (a table of its own, traces left in the agent as its Python steps leave them)."""
+    tables = {}
+    for overrides in ({}, QLAMBDA):
+        env = KoolioEnv("hallway", config=load_config(overrides=overrides), max_steps=200)
+        agent = make_learner(QTable(env.layout), env.config.learner, None)
+        loop = Episodes(env, agent, seed=1, compiled=True)
+        assert loop.compiled is not None and loop.compiled_reason is None
+        for e in range(3):
+            loop.begin(e)
+            loop.run()
+        tables[agent.name] = agent.table.rows
+    assert tables["q"] != tables["qlambda"]
+
+
+@pytest.mark.parametrize("overrides", [QLAMBDA, LONG_TRACES])
+def test_qlambda_stopped_between_chunks_leaves_the_traces_of_the_python_steps(
+    monkeypatch, overrides
+):
+    """A chunk boundary in the middle of an episode: the traces and the expected state
+    carry over, and after the stop they are those the Python steps leave."""
+    monkeypatch.setattr(episode_kernel, "CHUNK", 5)
+    runs = {}
+    for compiled in (True, False):
+        env = KoolioEnv("hallway", config=load_config(overrides=overrides), max_steps=0)
+        table = QTable(env.layout, {}, env.config.learner.q_init)
+        agent = make_learner(table, env.config.learner, None)
+        loop = Episodes(env, agent, seed=4, compiled=compiled)
+        for e in range(2):
+            loop.begin(e)
+            calls: list[int] = []
+            last = 12 if compiled else 60  # 60 steps either way
+
+            def stop(calls=calls, last=last):
+                calls.append(1)
+                return len(calls) >= last
+
+            res = loop.run(stop)
+        traces = list(agent.traces.items())
+        runs[compiled] = (res.row(), env.state_key, table.rows, traces, agent._expect)
+    assert len(runs[False][3]) > 1  # the premise: several entries traced
+    assert runs[True] == runs[False]
+
+
+def test_the_memory_runs_compiled_and_is_left_as_the_python_steps_leave_it():
+    """The premise of the memory cases: ``paper-memory`` runs compiled, its keys hold the
+    memory's codes, and after an episode the env's memory (``env.codes``) is the Python
+    loop's."""
+    runs = {}
+    for compiled in (True, False):
+        env = KoolioEnv("hallway", config=load_config(overrides=EVERY_MEMORY), max_steps=150)
+        agent = make_learner(QTable(env.layout), env.config.learner, None)
+        loop = Episodes(env, agent, seed=6, compiled=compiled)
+        assert (loop.compiled is not None) == compiled
+        loop.begin(0)
+        loop.run()
+        m = env.memory
+        runs[compiled] = (env.codes, m.goal, m.eow, m.action, m._goal_age, m._eow_age)
+        runs[compiled] += (env.state_key, sorted(agent.table.rows))
+    assert runs[True] == runs[False]
+    assert runs[True][3] > 0  # an action remembered
 
 
 def test_one_step_q_runs_compiled():
