@@ -849,10 +849,11 @@ def kernels_to_compile(env, robots: int = 1, training: bool = False) -> bool:
 
 
 def announce_compile(env, robots: int = 1, training: bool = False) -> None:
-    """One line before the one-time compile of the sensing kernels, when it is due."""
+    """One line before the one-time compile of the kernels (sensing, moves, the episode),
+    when it is due."""
     if kernels_to_compile(env, robots, training):
         print(
-            "compiling the sensing kernels (first run only, about 5-10 s); "
+            "compiling the simulator's kernels (first run only, about 20 s on 2 cores); "
             "later runs load them from the cache",
             file=sys.stderr,
             flush=True,

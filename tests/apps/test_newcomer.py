@@ -249,8 +249,8 @@ def test_the_compile_is_announced_before_it_happens_when_the_cache_is_cold(
     code, _, err = run(capsys, "train", *ROOM, "--episodes", "1")
     assert code == 0
     assert err.splitlines() == [
-        "compiling the sensing kernels (first run only, about 5-10 s); later runs load "
-        "them from the cache"
+        "compiling the simulator's kernels (first run only, about 20 s on 2 cores); "
+        "later runs load them from the cache"
     ]
     monkeypatch.setattr(cli, "_cached", lambda dispatcher: True)  # warm
     assert run(capsys, "train", *ROOM, "--episodes", "2")[2] == ""
