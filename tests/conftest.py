@@ -2,11 +2,18 @@
 
 from __future__ import annotations
 
+import signal
 from pathlib import Path
 
 import pytest
 
 from koolio_pymunk.apps import cli
+
+# Ctrl-C is part of what the tests check. A shell without job control starts a
+# background job with SIGINT ignored, and an ignored signal stays ignored in every
+# process it starts: give this one Python's own handler, which the commands the tests
+# run inherit as the default (a handler, unlike an ignore, is reset by exec).
+signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 @pytest.fixture(scope="session")
