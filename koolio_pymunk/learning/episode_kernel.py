@@ -67,10 +67,10 @@ from .fleet_kernel import (
     EVENTS,
     N_TERMINAL,
     SharedTable,
-    _find,
-    _row,
+    find_row,
     in_zone,
     reward_array,
+    row_of,
     zone_arrays,
 )
 from .fleet_kernel import update as td_update
@@ -212,11 +212,11 @@ def lambda_update(
     q, dirty, q_init = table[0], table[2], table[4]
     decay, cutoff = lam[1], lam[2]
     t_row, t_act, t_e, meta = traces
-    i = _row(index, table, state)
+    i = row_of(index, table, state)
     if terminal:
         target = reward
     else:
-        j = _find(index, nxt)
+        j = find_row(index, nxt)
         target = reward + gamma * (q[j].max() if j >= 0 else q_init)
     step = alpha * (target - q[i, action])
     n = meta[0]

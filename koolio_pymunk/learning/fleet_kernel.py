@@ -99,7 +99,7 @@ class SharedTable:
 
     def row_of(self, key: int) -> int:
         """The row of state ``key`` (-1: none)."""
-        return int(_find(self.index, key))
+        return int(find_row(self.index, key))
 
     def args(self) -> tuple:
         """The kernels' table group ``(q, keys, dirty, count, q_init)``; the typed dict
@@ -118,7 +118,7 @@ def _build_index(keys: np.ndarray, n: int):
 
 
 @numba.njit(cache=True)
-def _find(index, key: int) -> int:
+def find_row(index, key: int) -> int:
     """The row of ``key``, -1 when missing."""
     if key in index:
         return index[key]
@@ -126,11 +126,11 @@ def _find(index, key: int) -> int:
 
 
 @numba.njit(cache=True)
-def _row(index, table: tuple, key: int) -> int:
+def row_of(index, table: tuple, key: int) -> int:
     """The row of ``key``, created at ``q_init`` when missing (``QTable.row``);
     ``table`` is :meth:`SharedTable.args`."""
     q, keys, dirty, count, q_init = table
-    i = _find(index, key)
+    i = find_row(index, key)
     if i < 0:
         i = count[0]
         index[key] = i
@@ -148,11 +148,11 @@ def update(index, table: tuple, alpha: float, gamma: float, state: int, action: 
     """``QLearner.update``: Table 11, no bootstrap from a terminal step (``table``:
     :meth:`SharedTable.args`)."""
     q, dirty, q_init = table[0], table[2], table[4]
-    i = _row(index, table, state)
+    i = row_of(index, table, state)
     if terminal:
         target = reward
     else:
-        j = _find(index, nxt)
+        j = find_row(index, nxt)
         target = reward + gamma * (q[j].max() if j >= 0 else q_init)
     q[i, action] += alpha * (target - q[i, action])
     dirty[i] = True
@@ -183,7 +183,7 @@ def update_logged(
         return
     q, count = table[0], table[3]
     before = count[0]
-    i = _row(index, table, state)
+    i = row_of(index, table, state)
     old = q[i, action]
     update(index, table, alpha, gamma, state, action, reward, nxt, terminal)
     k = jn[r]
@@ -234,7 +234,7 @@ def choose(
         if explore[r] < epsilon[r]:
             actions[r] = random_action[r]
             continue
-        i = _find(index, state[r])
+        i = find_row(index, state[r])
         if i < 0:  # an unvisited state: a random action too
             actions[r] = random_action[r]
             continue
