@@ -87,7 +87,7 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
-from ..store.errors import ConfigError, KoolioError, located
+from ..store.errors import ConfigError, KoolioError, located, shown
 
 SPEC_KEYS = (
     "name",
@@ -312,17 +312,12 @@ def parse_spec(
 
 def _int(value: Any, src: str, item: str, minimum: int, maximum: int) -> int:
     if isinstance(value, bool) or not isinstance(value, int):
-        raise ConfigError(located(src, item, f"expected an integer, got {_show(value)}"))
+        raise ConfigError(located(src, item, f"expected an integer, got {shown(value)}"))
     if value < minimum:
         raise ConfigError(located(src, item, f"must be >= {minimum}, got {value}"))
     if value > maximum:
-        raise ConfigError(located(src, item, f"must be <= {maximum:,}, got {_show(value)}"))
+        raise ConfigError(located(src, item, f"must be <= {maximum:,}, got {shown(value)}"))
     return value
-
-
-def _show(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= 40 else text[:37] + "..."
 
 
 def _rotation(value: Any, src: str, item: str) -> float:

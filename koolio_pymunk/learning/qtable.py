@@ -68,7 +68,7 @@ import numpy as np
 
 from ..robot_runtime import MAX_Q, is_number, nonfinite_item
 from ..store.config import Config, MemoryConfig, load_config, profile_names, state_fields
-from ..store.errors import FileError, KoolioError, QTableError, located
+from ..store.errors import FileError, KoolioError, QTableError, located, shown
 from ..store.files import (
     atomic_link,
     atomic_write,
@@ -257,24 +257,24 @@ def check_header(header: Any, source: str) -> tuple[KeywordLayout, float]:
     layout = _check_layout(header.pop("layout", None), source)
     q_init = header.pop("q_init", 0.0)
     if not is_number(q_init) or abs(q_init) > MAX_Q:
-        raise bad("q_init", f"must be a finite number within +-{MAX_Q:g}, got {_show(q_init)}")
+        raise bad("q_init", f"must be a finite number within +-{MAX_Q:g}, got {shown(q_init)}")
     episodes = header.get("episodes", 0)
     if not _is_int(episodes) or episodes < 0:
-        raise bad("episodes", f"must be an integer >= 0, got {_show(episodes)}")
+        raise bad("episodes", f"must be an integer >= 0, got {shown(episodes)}")
     sensors = header.get("sensors", {})
     if not isinstance(sensors, dict):
-        raise bad("sensors", f"must be a mapping, got {_show(sensors)}")
+        raise bad("sensors", f"must be a mapping, got {shown(sensors)}")
     arena = header.get("arena")
     if arena is not None and not (
         isinstance(arena, dict)
         and isinstance(arena.get("name"), str)
         and isinstance(arena.get("sha256"), str)
     ):
-        raise bad("arena", f"must be {{name, sha256}}, got {_show(arena)}")
+        raise bad("arena", f"must be {{name, sha256}}, got {shown(arena)}")
     for key in RECORD_KEYS:
         value = header.get(key)
         if value is not None and not (isinstance(value, str) and value):
-            raise bad(key, f"must be a non-empty string, got {_show(value)}")
+            raise bad(key, f"must be a non-empty string, got {shown(value)}")
     item = nonfinite_item(header)
     if item is not None:  # 1e400 reads as infinity, which the next save writes as Infinity
         raise bad(item, "not a finite number (the table could not be saved again)")
@@ -286,7 +286,7 @@ def _check_layout(data: Any, source: str) -> KeywordLayout:
         return QTableError(located(source, f"header.layout{item}", problem))
 
     if not isinstance(data, dict):
-        raise bad("", f"must be a mapping, got {_show(data)}")
+        raise bad("", f"must be a mapping, got {shown(data)}")
     fields = data.get("fields")
     if not isinstance(fields, list) or not fields:
         raise bad(".fields", "must be a non-empty list of [name, levels]")
@@ -294,14 +294,14 @@ def _check_layout(data: Any, source: str) -> KeywordLayout:
     for i, f in enumerate(fields):
         ok = isinstance(f, list) and len(f) == 2 and isinstance(f[0], str) and _is_int(f[1])
         if not ok or not 1 <= f[1] <= MAX_LEVELS:
-            raise bad(f".fields[{i}]", f"must be [name, levels 1..{MAX_LEVELS}], got {_show(f)}")
+            raise bad(f".fields[{i}]", f"must be [name, levels 1..{MAX_LEVELS}], got {shown(f)}")
         out.append((f[0], f[1]))
     na = data.get("n_actions")
     if not _is_int(na) or not 1 <= na <= MAX_ACTIONS:
-        raise bad(".n_actions", f"must be an integer 1..{MAX_ACTIONS}, got {_show(na)}")
+        raise bad(".n_actions", f"must be an integer 1..{MAX_ACTIONS}, got {shown(na)}")
     layout = KeywordLayout(tuple(out), na)
     if "action_bits" in data and data["action_bits"] != layout.action_bits:
-        raise bad(".action_bits", f"{_show(data['action_bits'])}, expected {layout.action_bits}")
+        raise bad(".action_bits", f"{shown(data['action_bits'])}, expected {layout.action_bits}")
     if layout.total_bits > MAX_KEYWORD_BITS:
         raise bad("", f"a {layout.total_bits}-bit keyword does not fit {MAX_KEYWORD_BITS} bits")
     return layout
@@ -343,11 +343,6 @@ def _check_codes(keys: np.ndarray, layout: KeywordLayout, source: str) -> None:
                     f"{levels} levels",
                 )
             )
-
-
-def _show(value: Any, limit: int = 40) -> str:
-    text = repr(value)
-    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 def backup_path(path: Path) -> Path:
@@ -568,7 +563,7 @@ def check_compatible(
         )
     theirs = table.meta.get("sensors", {})
     if not isinstance(theirs, dict):
-        raise QTableError(located(source, "sensors", f"not a mapping: {_show(theirs)}"))
+        raise QTableError(located(source, "sensors", f"not a mapping: {shown(theirs)}"))
     for key in sorted(set(theirs) | set(sensors), key=str):
         if theirs.get(key) != sensors.get(key):
             raise QTableError(
@@ -675,7 +670,7 @@ def _profile_hint(table: QTable) -> str:
 def _recorded(sensors: dict[str, Any], key: str) -> str:
     """The value of ``key`` in a sensor signature, for a message (a missing key is not
     ``None``: that could be a value)."""
-    return _show(sensors[key], 80) if key in sensors else "none (not recorded)"
+    return shown(sensors[key], 80) if key in sensors else "none (not recorded)"
 
 
 def _fmt_layout(layout: KeywordLayout) -> str:

@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .errors import ConfigError, located
+from .errors import ConfigError, located, shown
 from .keyword import COMPASS_LEVELS, MAX_KEYWORD_BITS, N_ACTIONS, KeywordLayout
 from .realism_config import RealismConfig, validate_realism
 from .yamlfile import dump_yaml, read_yaml
@@ -455,25 +455,25 @@ def _coerce(value: Any, hint: Any, source: str, item: str) -> Any:
         return value
     if hint in (int, float):
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ConfigError(located(source, item, f"expected a number, got {_show(value)}"))
+            raise ConfigError(located(source, item, f"expected a number, got {shown(value)}"))
         try:
             number = float(value)
         except OverflowError:  # an integer beyond the float range
             number = math.inf
         if not math.isfinite(number) or abs(number) > MAX_NUMBER:
             raise ConfigError(
-                located(source, item, f"must be finite and at most 1e15, got {_show(value)}")
+                located(source, item, f"must be finite and at most 1e15, got {shown(value)}")
             )
         if hint is int and not number.is_integer():
-            raise ConfigError(located(source, item, f"expected an integer, got {_show(value)}"))
+            raise ConfigError(located(source, item, f"expected an integer, got {shown(value)}"))
         return int(value) if hint is int else number
     if hint is str:
         if not isinstance(value, str):
-            raise ConfigError(located(source, item, f"expected a string, got {_show(value)}"))
+            raise ConfigError(located(source, item, f"expected a string, got {shown(value)}"))
         return value
     if origin is list:
         if not isinstance(value, list):
-            raise ConfigError(located(source, item, f"expected a list, got {_show(value)}"))
+            raise ConfigError(located(source, item, f"expected a list, got {shown(value)}"))
         if len(value) > MAX_LIST:
             raise ConfigError(
                 located(source, item, f"{len(value):,} entries (the limit is {MAX_LIST})")
@@ -481,7 +481,7 @@ def _coerce(value: Any, hint: Any, source: str, item: str) -> Any:
         return [_coerce(v, args[0], source, f"{item}[{i}]") for i, v in enumerate(value)]
     if origin is dict and len(args) == 2:  # e.g. realism.randomize: name -> [low, high]
         if not isinstance(value, dict):
-            raise ConfigError(located(source, item, f"expected a mapping, got {_show(value)}"))
+            raise ConfigError(located(source, item, f"expected a mapping, got {shown(value)}"))
         if len(value) > MAX_LIST:
             raise ConfigError(
                 located(source, item, f"{len(value):,} entries (the limit is {MAX_LIST})")
@@ -497,11 +497,6 @@ def _coerce(value: Any, hint: Any, source: str, item: str) -> Any:
 MAX_NUMBER = 1e15
 #: Most entries of a list in a configuration (sensor angles, groups, thresholds).
 MAX_LIST = 64
-
-
-def _show(value: Any, limit: int = 40) -> str:
-    text = repr(value)
-    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 # --- validation -----------------------------------------------------------------------

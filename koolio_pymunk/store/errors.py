@@ -43,3 +43,16 @@ class InUseError(KoolioError):
 def located(source: str, item: str, problem: str) -> str:
     """Format the one-line message ``source: item: problem`` (item may be empty)."""
     return f"{source}: {item}: {problem}" if item else f"{source}: {problem}"
+
+
+def shown(value: object, limit: int = 40) -> str:
+    """A bad value as an error message shows it: its ``repr`` on one line, cut to ``limit``
+    characters.
+
+    >>> shown("a" * 50)
+    "'aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa..."
+    >>> shown([1, 2])
+    '[1, 2]'
+    """
+    text = repr(value).replace("\n", " ")
+    return text if len(text) <= limit else text[: limit - 3] + "..."

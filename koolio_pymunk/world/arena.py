@@ -33,7 +33,7 @@ from pathlib import Path
 from typing import NoReturn
 
 from ..store import yamlfile
-from ..store.errors import ArenaError, located
+from ..store.errors import ArenaError, located, shown
 from ..store.files import atomic_write_text
 from . import geometry
 
@@ -209,12 +209,6 @@ def _fail(source: str, item: str, problem: str) -> NoReturn:
     raise ArenaError(located(source, item, problem).replace("\n", " "))
 
 
-def _show(value: object, limit: int = 40) -> str:
-    """A short one-line ``repr`` of a bad value for an error message."""
-    text = repr(value).replace("\n", " ")
-    return text if len(text) <= limit else text[: limit - 3] + "..."
-
-
 def _fmt_num(x: float) -> str:
     return str(_num_out(x))
 
@@ -318,13 +312,13 @@ def _check_keys(
 
 def _mapping(value: object, source: str, item: str, what: str) -> dict:
     if not isinstance(value, dict):
-        _fail(source, item, f"not a mapping ({what}): {_show(value)}")
+        _fail(source, item, f"not a mapping ({what}): {shown(value)}")
     return value
 
 
 def _list(value: object, source: str, item: str, what: str) -> list:
     if not isinstance(value, list):
-        _fail(source, item, f"not a list ({what}): {_show(value)}")
+        _fail(source, item, f"not a list ({what}): {shown(value)}")
     return value
 
 
@@ -335,26 +329,26 @@ MAX_COORDINATE = 1_000_000.0
 def _number(value: object, source: str, item: str) -> float:
     """A finite int or float (not a bool, not a string)."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        _fail(source, item, f"not a number: {_show(value)}")
+        _fail(source, item, f"not a number: {shown(value)}")
     try:
         x = float(value)
     except OverflowError:  # an integer beyond the float range
         x = math.inf
     if not math.isfinite(x):
-        _fail(source, item, f"not a finite number: {_show(value)}")
+        _fail(source, item, f"not a finite number: {shown(value)}")
     return x
 
 
 def _coordinate(value: object, source: str, item: str) -> float:
     x = _number(value, source, item)
     if abs(x) > MAX_COORDINATE:
-        _fail(source, item, f"coordinate {_show(value)} beyond +-{MAX_COORDINATE:,.0f} in")
+        _fail(source, item, f"coordinate {shown(value)} beyond +-{MAX_COORDINATE:,.0f} in")
     return x
 
 
 def _point(value: object, source: str, item: str) -> Point:
     if not isinstance(value, (list, tuple)) or len(value) != 2:
-        _fail(source, item, f"not a point [x, y]: {_show(value)}")
+        _fail(source, item, f"not a point [x, y]: {shown(value)}")
     return (_coordinate(value[0], source, item), _coordinate(value[1], source, item))
 
 
@@ -368,12 +362,12 @@ def _points(value: object, source: str, item: str) -> tuple[Point, ...]:
 def _goal_name(value: object, source: str, item: str) -> str:
     """A goal or door name: a non-empty string, or an int (room number) made a string."""
     if isinstance(value, bool) or not isinstance(value, (str, int)):
-        _fail(source, item, f"not a name (string or room number): {_show(value)}")
+        _fail(source, item, f"not a name (string or room number): {shown(value)}")
     name = str(value).strip()
     if not name:
         _fail(source, item, "empty name")
     if not name.isprintable():  # names go into logs, one row per line
-        _fail(source, item, f"control characters in the name: {_show(name)}")
+        _fail(source, item, f"control characters in the name: {shown(name)}")
     if len(name) > MAX_NAME_CHARS:  # and a log line is bounded
         _fail(source, item, f"{len(name):,} characters (a name has at most {MAX_NAME_CHARS})")
     return name
@@ -403,7 +397,7 @@ def _parse_start(value: object, source: str) -> Start:
     heading = data.get("heading_deg")
     if heading is not None:
         if isinstance(heading, bool) or not isinstance(heading, (int, float)):
-            _fail(source, "start.heading_deg", f"not a number or null: {_show(heading)}")
+            _fail(source, "start.heading_deg", f"not a number or null: {shown(heading)}")
         heading = _number(heading, source, "start.heading_deg")
     return Start(_point(data["at"], source, "start.at"), heading)
 
@@ -462,16 +456,16 @@ def _parse_rotate(data: dict, source: str) -> float:
     if raw is None:
         return 0.0
     if isinstance(raw, bool) or not isinstance(raw, (int, float)):
-        _fail(source, "rotate_deg", f"not a finite number: {_show(raw)}")
+        _fail(source, "rotate_deg", f"not a finite number: {shown(raw)}")
     return _number(raw, source, "rotate_deg")
 
 
 def _parse_name(data: dict, source: str) -> str:
     name = data["name"]
     if isinstance(name, bool) or not isinstance(name, (str, int)) or not str(name).strip():
-        _fail(source, "name", f"not a non-empty string: {_show(name)}")
+        _fail(source, "name", f"not a non-empty string: {shown(name)}")
     if not str(name).strip().isprintable():
-        _fail(source, "name", f"control characters in the name: {_show(name)}")
+        _fail(source, "name", f"control characters in the name: {shown(name)}")
     if len(str(name).strip()) > MAX_NAME_CHARS:
         _fail(source, "name", f"more than {MAX_NAME_CHARS} characters")
     return str(name).strip()
@@ -524,12 +518,12 @@ def validate_arena(arena: Arena, robot_radius: float = 10.0) -> None:
         _check_finite_point(door.b, f"doors[{k}].b", src)
         _check_free_point(arena, door.plate, f"doors[{k}].plate", src, boxes)
     if not math.isfinite(arena.rotate_deg):
-        _fail(src, "rotate_deg", f"not a finite number: {_show(arena.rotate_deg)}")
+        _fail(src, "rotate_deg", f"not a finite number: {shown(arena.rotate_deg)}")
 
 
 def _check_finite_point(p: Point, item: str, src: str) -> None:
     if len(p) != 2 or not all(math.isfinite(float(c)) for c in p):
-        _fail(src, item, f"not a finite point: {_show(p)}")
+        _fail(src, item, f"not a finite point: {shown(p)}")
 
 
 def _check_polygon(poly: tuple[Point, ...], item: str, src: str) -> None:
@@ -682,7 +676,7 @@ def _check_start(arena: Arena, robot_radius: float, src: str) -> None:
     start = arena.start
     _check_free_point(arena, start.at, "start.at", src)
     if start.heading_deg is not None and not math.isfinite(start.heading_deg):
-        _fail(src, "start.heading_deg", f"not a number or null: {_show(start.heading_deg)}")
+        _fail(src, "start.heading_deg", f"not a number or null: {shown(start.heading_deg)}")
     names = _segment_names(arena)
     for (a, b), name in zip(arena.segments(), names, strict=True):
         d = geometry.distance_point_segment(start.at, a, b)

@@ -48,7 +48,7 @@ from fractions import Fraction
 from pathlib import Path
 from typing import NoReturn
 
-from ..store.errors import ArenaError, located
+from ..store.errors import ArenaError, located, shown
 from .arena import (
     Arena,
     Door,
@@ -60,7 +60,6 @@ from .arena import (
     _list,
     _mapping,
     _point,
-    _show,
     read_yaml,
     validate_arena,
 )
@@ -110,24 +109,24 @@ def _positive(value: object, source: str, item: str, allow_zero: bool = False) -
 def _positive_fraction(value: object, source: str, item: str, allow_zero: bool = False) -> Fraction:
     x = _fraction(value, source, item)
     if x < 0 or (x == 0 and not allow_zero):
-        _fail(source, item, f"must be {'>= 0' if allow_zero else '> 0'}: {_show(value)}")
+        _fail(source, item, f"must be {'>= 0' if allow_zero else '> 0'}: {shown(value)}")
     return x
 
 
 def _fraction(value: object, source: str, item: str) -> Fraction:
     """A number, or a string like ``"11/3"`` or ``"3 2/3"``, as an exact Fraction."""
     if isinstance(value, bool):
-        _fail(source, item, f"not a number: {_show(value)}")
+        _fail(source, item, f"not a number: {shown(value)}")
     if isinstance(value, (int, float)):
         if not math.isfinite(value):
-            _fail(source, item, f"not a finite number: {_show(value)}")
+            _fail(source, item, f"not a finite number: {shown(value)}")
         return Fraction(value).limit_denominator(10**6)
     if isinstance(value, str):
         try:
             return sum((Fraction(part) for part in value.split()), Fraction(0))
         except (ValueError, ZeroDivisionError):
             pass
-    _fail(source, item, f"not a number: {_show(value)}")
+    _fail(source, item, f"not a number: {shown(value)}")
 
 
 def _shape(table: dict, source: str) -> HallwayShape:
@@ -189,22 +188,22 @@ def _start(table: dict, shape: HallwayShape, source: str) -> Start:
     heading = data.get("heading_deg")
     if heading is not None:
         if isinstance(heading, bool) or not isinstance(heading, (int, float)):
-            _fail(source, "start.heading_deg", f"not a number or null: {_show(heading)}")
+            _fail(source, "start.heading_deg", f"not a number or null: {shown(heading)}")
         if not math.isfinite(heading):
-            _fail(source, "start.heading_deg", f"not a finite number: {_show(heading)}")
+            _fail(source, "start.heading_deg", f"not a finite number: {shown(heading)}")
         heading = float(heading)
     return Start(at, heading)
 
 
 def _room(value: object, source: str, item: str) -> str:
     if isinstance(value, bool) or not isinstance(value, (int, str)) or not str(value).isdigit():
-        _fail(source, item, f"not a room number: {_show(value)}")
+        _fail(source, item, f"not a room number: {shown(value)}")
     return str(value)
 
 
 def _choice(value: object, choices: tuple[str, ...], source: str, item: str) -> str:
     if value not in choices:
-        _fail(source, item, f"must be one of {', '.join(choices)}: {_show(value)}")
+        _fail(source, item, f"must be one of {', '.join(choices)}: {shown(value)}")
     return str(value)
 
 
@@ -295,14 +294,14 @@ def _arena_door(door: DoorSpec, shape: HallwayShape) -> Door:
 def _name(table: dict, source: str) -> str:
     name = table.get("name", "hallway")
     if not isinstance(name, str) or not name.strip():
-        _fail(source, "name", f"not a non-empty string: {_show(name)}")
+        _fail(source, "name", f"not a non-empty string: {shown(name)}")
     return name.strip()
 
 
 def _rotate(table: dict, source: str) -> float:
     raw = table.get("rotate_deg", 0)
     if isinstance(raw, bool) or not isinstance(raw, (int, float)) or not math.isfinite(raw):
-        _fail(source, "rotate_deg", f"not a finite number: {_show(raw)}")
+        _fail(source, "rotate_deg", f"not a finite number: {shown(raw)}")
     return float(raw)
 
 
