@@ -52,7 +52,7 @@ def new_trig(n_rays: int, n_robots: int | None = None) -> np.ndarray:
 
 
 @numba.njit(cache=True)
-def _camera(
+def camera_reading(
     x: float,
     y: float,
     direction: float,
@@ -166,12 +166,12 @@ def sense_one(x: float, y: float, h: float, geometry: tuple, goal: np.ndarray, p
     goal2 = goal.reshape(1, 2)
     for c in range(n_cam):
         direction = h + camera_dirs[c]
-        raw[n_sonar + c] = _camera(x, y, direction, goal2, half_arc, radius, far, walls)[0]
-        d, k = _camera(x, y, direction, markers, half_arc, radius, far, walls)
+        raw[n_sonar + c] = camera_reading(x, y, direction, goal2, half_arc, radius, far, walls)[0]
+        d, k = camera_reading(x, y, direction, markers, half_arc, radius, far, walls)
         raw[n_sonar + n_cam + c] = d
         eow_k[c] = k
         if plates.shape[0] > 0:
-            decoy[c] = _camera(x, y, direction, plates, half_arc, radius, far, walls)[0]
+            decoy[c] = camera_reading(x, y, direction, plates, half_arc, radius, far, walls)[0]
     raw[n_sonar + 2 * n_cam] = (h / TWO_PI) * 256.0
 
 

@@ -21,7 +21,7 @@ import numba
 import numpy as np
 
 from .encoding_kernel import readout
-from .ray_kernel import _camera, sense_one
+from .ray_kernel import camera_reading, sense_one
 from .realism import (
     F_BEAM,
     F_CAMERA,
@@ -229,7 +229,7 @@ def sense_realism(x: float, y: float, h: float, geometry: tuple, goal: np.ndarra
         decoy[c] = far
         if rflags[F_MISREAD] and u[4 * n_sonar + 3 * c] < rparams[P_MISREAD]:
             direction = h + camera_dirs[c]
-            decoy[c] = _camera(x, y, direction, plates, params[3], params[1], far, walls)[0]
+            decoy[c] = camera_reading(x, y, direction, plates, params[3], params[1], far, walls)[0]
     apply_realism(raw, rays, ray_cos, decoy, u, rparams, rflags, neighbours, echo, crossed,
                   missed, misread)  # fmt: skip
     return readout(raw, noise, encoding, out, eow_k, codes)
