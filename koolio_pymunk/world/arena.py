@@ -298,7 +298,7 @@ def load_arena(path_or_name: str | Path, robot_radius: float = 10.0) -> Arena:
 
 
 # -- parsing (types and shape) ----------------------------------------------------------
-def _check_keys(
+def check_keys(
     data: dict, allowed: Sequence[str], required: Sequence[str], source: str, prefix: str
 ) -> None:
     for key in data:
@@ -310,13 +310,13 @@ def _check_keys(
             _fail(source, f"{prefix}{key}", "missing required key")
 
 
-def _mapping(value: object, source: str, item: str, what: str) -> dict:
+def mapping_of(value: object, source: str, item: str, what: str) -> dict:
     if not isinstance(value, dict):
         _fail(source, item, f"not a mapping ({what}): {shown(value)}")
     return value
 
 
-def _list(value: object, source: str, item: str, what: str) -> list:
+def list_of(value: object, source: str, item: str, what: str) -> list:
     if not isinstance(value, list):
         _fail(source, item, f"not a list ({what}): {shown(value)}")
     return value
@@ -346,17 +346,17 @@ def _coordinate(value: object, source: str, item: str) -> float:
     return x
 
 
-def _point(value: object, source: str, item: str) -> Point:
+def point_of(value: object, source: str, item: str) -> Point:
     if not isinstance(value, (list, tuple)) or len(value) != 2:
         _fail(source, item, f"not a point [x, y]: {shown(value)}")
     return (_coordinate(value[0], source, item), _coordinate(value[1], source, item))
 
 
 def _points(value: object, source: str, item: str) -> tuple[Point, ...]:
-    items = _list(value, source, item, "expected a list of points [[x, y], ...]")
+    items = list_of(value, source, item, "expected a list of points [[x, y], ...]")
     if len(items) > MAX_POLYGON_POINTS:
         _fail(source, item, f"{len(items):,} points (the limit is {MAX_POLYGON_POINTS:,})")
-    return tuple(_point(p, source, f"{item}[{i}]") for i, p in enumerate(items))
+    return tuple(point_of(p, source, f"{item}[{i}]") for i, p in enumerate(items))
 
 
 def _goal_name(value: object, source: str, item: str) -> str:
@@ -374,42 +374,42 @@ def _goal_name(value: object, source: str, item: str) -> str:
 
 
 def _parse_goal(value: object, source: str, item: str) -> Goal:
-    data = _mapping(value, source, item, "expected {name: ..., at: [x, y]}")
-    _check_keys(data, GOAL_KEYS, GOAL_KEYS, source, f"{item}.")
+    data = mapping_of(value, source, item, "expected {name: ..., at: [x, y]}")
+    check_keys(data, GOAL_KEYS, GOAL_KEYS, source, f"{item}.")
     return Goal(
-        _goal_name(data["name"], source, f"{item}.name"), _point(data["at"], source, f"{item}.at")
+        _goal_name(data["name"], source, f"{item}.name"), point_of(data["at"], source, f"{item}.at")
     )
 
 
 def _parse_marker(value: object, source: str, item: str) -> Marker:
-    data = _mapping(value, source, item, "expected {at: [x, y], zone: [[x, y], ...]}")
-    _check_keys(data, MARKER_KEYS, ("at",), source, f"{item}.")
+    data = mapping_of(value, source, item, "expected {at: [x, y], zone: [[x, y], ...]}")
+    check_keys(data, MARKER_KEYS, ("at",), source, f"{item}.")
     zone = data.get("zone")
     return Marker(
-        _point(data["at"], source, f"{item}.at"),
+        point_of(data["at"], source, f"{item}.at"),
         None if zone is None else _points(zone, source, f"{item}.zone"),
     )
 
 
 def _parse_start(value: object, source: str) -> Start:
-    data = _mapping(value, source, "start", "expected {at: [x, y], heading_deg: ...}")
-    _check_keys(data, START_KEYS, ("at",), source, "start.")
+    data = mapping_of(value, source, "start", "expected {at: [x, y], heading_deg: ...}")
+    check_keys(data, START_KEYS, ("at",), source, "start.")
     heading = data.get("heading_deg")
     if heading is not None:
         if isinstance(heading, bool) or not isinstance(heading, (int, float)):
             _fail(source, "start.heading_deg", f"not a number or null: {shown(heading)}")
         heading = _number(heading, source, "start.heading_deg")
-    return Start(_point(data["at"], source, "start.at"), heading)
+    return Start(point_of(data["at"], source, "start.at"), heading)
 
 
 def _parse_door(value: object, source: str, item: str) -> Door:
-    data = _mapping(value, source, item, "expected {name, a: [x, y], b: [x, y], plate: [x, y]}")
-    _check_keys(data, DOOR_KEYS, DOOR_KEYS, source, f"{item}.")
+    data = mapping_of(value, source, item, "expected {name, a: [x, y], b: [x, y], plate: [x, y]}")
+    check_keys(data, DOOR_KEYS, DOOR_KEYS, source, f"{item}.")
     return Door(
         _goal_name(data["name"], source, f"{item}.name"),
-        _point(data["a"], source, f"{item}.a"),
-        _point(data["b"], source, f"{item}.b"),
-        _point(data["plate"], source, f"{item}.plate"),
+        point_of(data["a"], source, f"{item}.a"),
+        point_of(data["b"], source, f"{item}.b"),
+        point_of(data["plate"], source, f"{item}.plate"),
     )
 
 
@@ -417,7 +417,7 @@ def _entries(data: dict, key: str, source: str, what: str) -> list:
     raw = data.get(key)
     if raw is None:
         return []
-    entries = _list(raw, source, key, what)
+    entries = list_of(raw, source, key, what)
     if len(entries) > MAX_ENTRIES:
         _fail(source, key, f"{len(entries):,} entries (the limit is {MAX_ENTRIES:,})")
     return entries
@@ -481,8 +481,8 @@ def parse_arena(
     """
     if data is None:
         _fail(source, "", "empty file (expected a mapping with name, walls, goals, ...)")
-    data = _mapping(data, source, "", "expected keys name, walls, goals, end_of_world, start")
-    _check_keys(data, TOP_KEYS, REQUIRED_TOP_KEYS, source, "")
+    data = mapping_of(data, source, "", "expected keys name, walls, goals, end_of_world, start")
+    check_keys(data, TOP_KEYS, REQUIRED_TOP_KEYS, source, "")
     arena = Arena(
         name=_parse_name(data, source),
         walls=_points(data["walls"], source, "walls"),

@@ -56,10 +56,10 @@ from .arena import (
     Marker,
     Point,
     Start,
-    _check_keys,
-    _list,
-    _mapping,
-    _point,
+    check_keys,
+    list_of,
+    mapping_of,
+    point_of,
     read_yaml,
     validate_arena,
 )
@@ -130,8 +130,8 @@ def _fraction(value: object, source: str, item: str) -> Fraction:
 
 
 def _shape(table: dict, source: str) -> HallwayShape:
-    data = _mapping(table["hallway"], source, "hallway", "expected {length_tiles, ...}")
-    _check_keys(data, HALLWAY_KEYS, HALLWAY_KEYS, source, "hallway.")
+    data = mapping_of(table["hallway"], source, "hallway", "expected {length_tiles, ...}")
+    check_keys(data, HALLWAY_KEYS, HALLWAY_KEYS, source, "hallway.")
     tile = _positive_fraction(data["tile_in"], source, "hallway.tile_in")
     length = _positive_fraction(data["length_tiles"], source, "hallway.length_tiles")
     width = _positive_fraction(data["width_tiles"], source, "hallway.width_tiles")
@@ -175,13 +175,13 @@ def hallway_markers(shape: HallwayShape) -> tuple[Marker, ...]:
 
 
 def _start(table: dict, shape: HallwayShape, source: str) -> Start:
-    data = _mapping(table["start"], source, "start", "expected {at_tiles_from_stairs: n}")
-    _check_keys(data, START_KEYS, (), source, "start.")
+    data = mapping_of(table["start"], source, "start", "expected {at_tiles_from_stairs: n}")
+    check_keys(data, START_KEYS, (), source, "start.")
     has_tiles, has_at = "at_tiles_from_stairs" in data, "at" in data
     if has_tiles == has_at:
         _fail(source, "start", "give exactly one of at_tiles_from_stairs or at")
     if has_at:
-        at = _point(data["at"], source, "start.at")
+        at = point_of(data["at"], source, "start.at")
     else:
         tiles = _positive(data["at_tiles_from_stairs"], source, "start.at_tiles_from_stairs")
         at = (tiles * shape.tile, shape.width / 2)
@@ -208,8 +208,9 @@ def _choice(value: object, choices: tuple[str, ...], source: str, item: str) -> 
 
 
 def _door(value: object, shape: HallwayShape, source: str, item: str) -> DoorSpec:
-    data = _mapping(value, source, item, "expected {room, side, tiles or inches, width_in, plate}")
-    _check_keys(data, DOOR_KEYS, DOOR_REQUIRED, source, f"{item}.")
+    expected = "expected {room, side, tiles or inches, width_in, plate}"
+    data = mapping_of(value, source, item, expected)
+    check_keys(data, DOOR_KEYS, DOOR_REQUIRED, source, f"{item}.")
     room = _room(data["room"], source, f"{item}.room")
     side = _choice(data["side"], ("north", "south"), source, f"{item}.side")
     wanted = "north" if int(room) % 2 == 0 else "south"
@@ -278,7 +279,7 @@ def _check_door_places(doors: list[DoorSpec], shape: HallwayShape, source: str) 
 
 
 def _doors(table: dict, shape: HallwayShape, source: str) -> list[DoorSpec]:
-    rows = _list(table["doors"], source, "doors", "expected a list of doors")
+    rows = list_of(table["doors"], source, "doors", "expected a list of doors")
     if not rows:
         _fail(source, "doors", "empty list: at least one door is needed")
     doors = [_door(row, shape, source, f"doors[{k}]") for k, row in enumerate(rows)]
@@ -311,8 +312,8 @@ def _active(table: dict, source: str) -> str:
 
 def build_hallway(table: dict, source: str = "<door table>", robot_radius: float = 10.0) -> Arena:
     """The hallway :class:`Arena` described by a door table (see the module docstring)."""
-    table = _mapping(table, source, "", "expected a door table with hallway, start, doors")
-    _check_keys(table, TABLE_KEYS, TABLE_REQUIRED, source, "")
+    table = mapping_of(table, source, "", "expected a door table with hallway, start, doors")
+    check_keys(table, TABLE_KEYS, TABLE_REQUIRED, source, "")
     shape = _shape(table, source)
     doors = _doors(table, shape, source)
     arena = Arena(
