@@ -24,6 +24,8 @@ written with ``repr`` so that they round-trip exactly.
 
 from __future__ import annotations
 
+import functools
+import os
 import sys
 import time
 from collections import deque
@@ -36,7 +38,7 @@ from ..store.episode_log import LogWriter, check_log_path, log_rows
 from ..store.errors import KoolioError, located
 from ..store.interrupts import SafeInterrupt
 from ..task.env import KoolioEnv
-from ..world.arena import arena_record, load_arena
+from ..world.arena import arena_path, arena_record, load_arena
 from .algorithms import attach, make_learner
 from .episodes import (
     EVAL_STREAM,
@@ -134,12 +136,23 @@ def run_record(env: KoolioEnv) -> dict[str, str]:
 
 
 def arena_goal(env: KoolioEnv) -> str:
-    """The active goal of ``env``'s arena file (``--goal`` changes the env's)."""
+    """The active goal of ``env``'s arena file (``--goal`` changes the env's).
+
+    The file is read once per version (its path, size and modification time): a
+    training run asks at every open and check, and parsing the hallway's YAML costs
+    more than a hundred of its episodes' saves."""
     arena = env.arena
     try:
-        return load_arena(arena.source, env.config.robot.radius).active_goal
+        st = os.stat(arena_path(arena.source))
+        return _file_goal(arena.source, env.config.robot.radius, st.st_mtime_ns, st.st_size)
     except (KoolioError, OSError):  # an arena made in memory: its own active goal
         return arena.active_goal
+
+
+@functools.lru_cache(maxsize=16)
+def _file_goal(source: str, radius: float, mtime_ns: int, size: int) -> str:
+    """The active goal of the arena file ``source`` as it is at ``mtime_ns``/``size``."""
+    return load_arena(source, radius).active_goal
 
 
 class RunFiles:

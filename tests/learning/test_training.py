@@ -100,3 +100,24 @@ def test_evaluate_is_greedy_and_does_not_learn(tmp_path) -> None:
     assert a == b
     assert table.rows == rows
     assert a.goal_rate + a.end_of_world_rate + a.truncated_rate == pytest.approx(1.0)
+
+
+def test_the_arena_files_goal_is_read_again_when_the_file_changes(tmp_path) -> None:
+    """``arena_goal`` reads the arena file once per version: an edited file's new active
+    goal is seen (the cache is keyed by the file's size and modification time)."""
+    import os
+
+    from koolio_pymunk.learning.training import arena_goal
+    from koolio_pymunk.world.arena import arena_path
+
+    text = arena_path("hallway").read_text()
+    arena = tmp_path / "h.yaml"
+    arena.write_text(text)
+    env = KoolioEnv(str(arena))
+    first = arena_goal(env)
+    other = next(g for g in env.arena.goal_names() if g != first)
+    arena.write_text(text.replace(f"active_goal: '{first}'", f"active_goal: '{other}'"))
+    st = arena.stat()
+    os.utime(arena, ns=(st.st_atime_ns, st.st_mtime_ns + 10**9))
+    assert arena.read_text() != text  # the premise: the file names another goal now
+    assert arena_goal(env) == other
