@@ -223,6 +223,14 @@ def train_many(
     return run.run(discard_unfinished, report, report_every)
 
 
+def _generators(n: int):
+    """A typed list of ``n`` distinct generators (their states are set before use)."""
+    out = generator_list(np.random.default_rng(0), n)
+    for i in range(n):
+        set_generator(out, i, np.random.Generator(np.random.PCG64(i)))
+    return out
+
+
 class _Run:
     def __init__(
         self,
@@ -314,8 +322,8 @@ class _Run:
         """The slots of prepared starts (:mod:`.fleet_tick`), the records of finished
         episodes, and every robot waiting for its first start."""
         slots = max(2 * robots, 16)
-        self.pool = generator_list(self.tick_rng, slots)
-        self.gens = generator_list(self.tick_rng, robots)  # placeholders until a start
+        self.pool = _generators(slots)
+        self.gens = _generators(robots)
         self.slot_goal = np.zeros((slots, 2))
         self.slot_heading = np.zeros(slots)
         self.slot_epsilon = np.zeros(slots)
@@ -333,8 +341,9 @@ class _Run:
         self.ctl[C_TAIL] = robots
 
     def _prepare(self) -> None:
-        """Prepare the starts the next call may make (the draws ``_start`` made: the
-        episode's generator, its random goal, its start heading)."""
+        """Prepare the starts the next call may make: the episode's generator
+        (``default_rng(episode_seeds(seed, k)[0])``'s state), its random goal and start
+        heading drawn from it, its epsilon."""
         ctl, env = self.ctl, self.env
         slots = len(self.pool)
         names = env.world_arena.goal_names()
@@ -342,16 +351,16 @@ class _Run:
         until = min(int(ctl[C_STARTED]) + slots, self.budget)
         for s in range(int(ctl[C_PREPARED]), until):
             k = self.first + s
-            rng = np.random.default_rng(env_seed(self.seed, k))
+            slot = s % slots
+            rng = self.pool[slot]  # a finished episode's generator, or one not used yet
+            rng.bit_generator.state = np.random.PCG64(env_seed(self.seed, k)).state
             goal = names[int(rng.integers(len(names)))] if env.random_goal else env.goal_name
             heading = (
                 np.radians(start.heading_deg)
                 if start.heading_deg is not None
                 else float(rng.uniform(0.0, 2.0 * np.pi))
             )
-            slot = s % slots
             epsilon = self.cfg.learner.epsilon.at(k)
-            set_generator(self.pool, slot, rng)
             self.slot_goal[slot] = env.world_arena.goal(goal).at
             self.slot_heading[slot] = float(heading) % TWO_PI  # World.place
             self.slot_epsilon[slot] = epsilon

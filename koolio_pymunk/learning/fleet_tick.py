@@ -16,7 +16,10 @@ computes a step a second way.
 * *starts*: Python prepares the next episode starts ahead, one slot each (the
   episode's generator, its goal, start heading and epsilon, drawn as :mod:`.fleet` draws
   them); a start takes the next prepared slot, in start order, and draws its first
-  reading's noise from that generator;
+  reading's noise from that generator. The generators are objects made once (a robot's,
+  a slot's), swapped at a start between the robot and the slot, whose state Python sets
+  to the fresh generator's of the episode it prepares (a numba generator is one unboxing
+  of the Python object: cheap to reuse, costly to make);
 * *finished episodes*: recorded in ``records`` (robot, start, outcome, steps, bumps,
   rescued, return); Python logs them and saves the table. The call stops right after the
   finish that makes ``records`` reach ``ctl[C_STOP_AT]`` (the next save), in the middle of
@@ -66,7 +69,7 @@ R_ROBOT, R_START, R_OUTCOME, R_STEPS, R_BUMPS, R_RESCUED = range(6)
 
 @numba.njit(cache=True)
 def generator_list(rng, n: int):
-    """A typed list of ``n`` references to ``rng`` (slots for the episodes' generators)."""
+    """A typed list of ``n`` references to ``rng`` (:func:`set_generator` sets each)."""
     out = List()
     for _ in range(n):
         out.append(rng)
@@ -212,6 +215,7 @@ def _start_pending(ctl, pending, gens, pool, starts, sensing, motion, robots, co
                 return False
             slot = s % len(pool)
             rng = pool[slot]
+            pool[slot] = gens[r]  # the finished episode's generator: the slot's to refill
             gens[r] = rng
             goals[r, 0], goals[r, 1] = goal_at[slot, 0], goal_at[slot, 1]
             cx = start_at[0] + offsets[r]  # World.place
