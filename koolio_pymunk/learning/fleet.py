@@ -9,20 +9,23 @@ cap). Their experience goes into one :class:`~koolio_pymunk.learning.qtable.QTab
 
 1. every active robot chooses an action epsilon-greedily from the table as it stands
    (:func:`qkernel.choose`);
-2. all robots act in one compiled call (:func:`fleet_kernel.move_all`: turns, and each
-   Forward or Reverse a :func:`~koolio_pymunk.world.swept_move.sweep` against the robot's
-   own copy of the walls, in its copy's coordinates, as the pymunk world moves it, bit
-   for bit); the pymunk bodies are set from those positions before a rescue (which moves
-   through pymunk) and at the end of the run;
-3. all robots are sensed in two compiled calls (:func:`raycast.sense_batch`,
-   :func:`readout.readout_batch`: robots x rays x walls; always the compiled kernel,
-   which reads what the pymunk reference reads);
+2. all robots act (:func:`fleet_kernel.move_all`: turns, and each Forward or Reverse a
+   :func:`~koolio_pymunk.world.swept_move.sweep` against the robot's own copy of the
+   walls, in its copy's coordinates, as the pymunk world moves it, bit for bit); the
+   pymunk bodies are set from those positions at the end of the run;
+3. all robots are sensed (:func:`raycast.sense_batch`, :func:`readout.readout_batch`:
+   robots x rays x walls; always the compiled kernel, which reads what the pymunk
+   reference reads);
 4. **in robot index order**, each robot's step is judged (reward, end of episode),
    its Table 11 update applied to the shared table (so robot ``r`` bootstraps from values
-   robots ``< r`` updated in the same tick), then rescued if auto rescue fires;
-   a finished episode is logged, and the robot starts a new one if the budget allows.
-   :func:`qkernel.learn` does this compiled and hands each rescue draw and episode end
-   to Python in that same order.
+   robots ``< r`` updated in the same tick), then rescued if auto rescue fires
+   (``rescue_robot``'s moves in the robot's copy of the arena); a finished episode is
+   logged, and the robot starts a new one if the budget allows.
+
+Ticks run compiled, many in one call (:func:`fleet_tick.run_ticks`, about :data:`CHUNK`
+robot-steps); Python prepares episode starts ahead and logs the finished episodes, the
+call stopping at the finish that makes a save due (mid-tick if need be) so that every
+save holds the table as it stood at that finish.
 
 **Numbering.** Episodes are numbered in completion order (robot index order within a
 tick), continuing from the table's ``episodes`` count, and logged in the usual CSV
@@ -48,14 +51,15 @@ often and every save is an fsynced file write), and always at the end and on Ctr
 finishes, so after a SIGKILL the log may be ahead of the table by up to ``save_every - 1``
 rows: resuming removes them (:mod:`koolio_pymunk.store.episode_log`).
 
-**Ctrl-C** (taken between ticks) folds every unfinished episode into the table and logs
-it ``interrupted``, numbered ``first + finished``, ``+ 1``, ... in robot order (the numbers
-those episodes get when training resumes). With ``discard_unfinished`` only the unfinished
-episodes are discarded: every finished episode stays in the table and the log. The robots
-share one table, so an unfinished episode's writes are interleaved with those of
-episodes that finished; each robot journals its own writes (:func:`qkernel.undo_writes`),
-and the discard takes back, newest first, every write of an unfinished episode that no
-other robot has written over since (and drops the rows only they created), then saves.
+**Ctrl-C** (taken between two compiled calls, so between ticks) folds every unfinished
+episode into the table and logs it ``interrupted``, numbered ``first + finished``,
+``+ 1``, ... in robot order (the numbers those episodes get when training resumes). With
+``discard_unfinished`` only the unfinished episodes are discarded: every finished episode
+stays in the table and the log. The robots share one table, so an unfinished episode's
+writes are interleaved with those of episodes that finished; each robot journals its own
+writes (:func:`qkernel.undo_writes`), and the discard takes back, newest first, every
+write of an unfinished episode that no other robot has written over since (and drops the
+rows only they created), then saves.
 
 **Algorithm.** One-step Q only (``learner.algorithm: q``): Q(lambda) and Dyna-Q
 (``docs/learning.md``) are refused with a one-line error, since the compiled loop has
