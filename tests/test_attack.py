@@ -234,10 +234,12 @@ def _interrupt_after(monkeypatch, target, name: str, calls: int) -> None:
 
 @pytest.mark.parametrize("discard", [False, True])
 def test_ctrl_c_with_robots_keeps_every_finished_episode(work, capsys, monkeypatch, discard):
+    from koolio_pymunk.learning import fleet
     from koolio_pymunk.learning.fleet import _Run
 
-    tick = _Run._tick
-    _interrupt_after(monkeypatch, _Run, "_tick", 150)
+    ticks = _Run._ticks
+    monkeypatch.setattr(fleet, "CHUNK", 1)  # one tick per compiled call
+    _interrupt_after(monkeypatch, _Run, "_ticks", 150)
     flag = ["--discard-unfinished"] if discard else []
     code, _, _ = run_cli(capsys, *TRAIN, "--qtable", "m.qtable", "--log", "m.csv",
                          "--robots", "4", "--episodes", "100", *flag)  # fmt: skip
@@ -247,7 +249,7 @@ def test_ctrl_c_with_robots_keeps_every_finished_episode(work, capsys, monkeypat
     assert done == list(range(table.meta["episodes"])) and len(done) >= 4
     n = len(done)
     assert cut == ([] if discard else [n, n + 1, n + 2, n + 3])  # four numbers, not one
-    monkeypatch.setattr(_Run, "_tick", tick)
+    monkeypatch.setattr(_Run, "_ticks", ticks)
     code, _, _ = run_cli(capsys, *TRAIN, "--qtable", "m.qtable", "--log", "m.csv",
                          "--robots", "4", "--episodes", "4")  # fmt: skip
     assert code == 0

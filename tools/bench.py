@@ -48,6 +48,7 @@ stretch wall time, and the CPU figure is the one to compare between runs.
     .venv/bin/python tools/bench.py --out bench.json         # a few minutes
     .venv/bin/python tools/bench.py --quick                   # about a minute
     .venv/bin/python tools/bench.py --algorithms-only         # the algorithms section only
+    .venv/bin/python tools/bench.py --robots-only             # the N-robot row only
 """
 
 from __future__ import annotations
@@ -539,6 +540,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument(
         "--algorithms-only", action="store_true", help="only the cost per step of each algorithm"
     )
+    p.add_argument(
+        "--robots-only", action="store_true", help="only the N-robot row (--robots robots)"
+    )
     p.add_argument("--competence-seed", type=int, default=None, help=argparse.SUPPRESS)
     p.add_argument("--folder", default=None, help=argparse.SUPPRESS)
     args = p.parse_args(argv)
@@ -566,6 +570,11 @@ def main(argv: list[str] | None = None) -> int:
 
         return _write(report, args.out)
     print(f"  {'':<34} {'per wall s':>10} {'per CPU s':>10}")
+    if args.robots_only:
+        with tempfile.TemporaryDirectory(dir=ROOT) as tmp:
+            report["many"] = many(args.robots, 300 if q else 3000, Path(tmp))
+        print(table_line(f"{args.robots} robots robot-steps/s", report["many"]))
+        return _write(report, args.out)
     with tempfile.TemporaryDirectory(dir=ROOT) as tmp:
         folder = Path(tmp)
         ref = learning_loop("pymunk", 4_000 if q else 15_000)

@@ -838,9 +838,9 @@ def kernels_to_compile(env, robots: int = 1, training: bool = False) -> bool:
 
         entries = [ray_kernel.sense_one, encoding_kernel.readout]
     if robots > 1:
-        from ..learning import fleet_kernel
+        from ..learning import fleet_tick
 
-        entries.append(fleet_kernel.learn)
+        entries.append(fleet_tick.run_ticks)
     elif training and env.config.learner.algorithm == "q" and not env.memory.on:
         from ..learning import episode_kernel
 

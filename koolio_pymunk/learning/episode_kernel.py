@@ -101,8 +101,9 @@ def why_not(env: KoolioEnv, agent: object, learn: bool = True) -> str | None:
 
 
 @numba.njit(cache=True)
-def _sense(x: float, y: float, h: float, rng, sense: tuple) -> tuple[int, bool, bool]:
-    """``KernelInputs.sense_readout``: the reading's draws from ``rng``, the kernels."""
+def sense_reading(x: float, y: float, h: float, rng, sense: tuple) -> tuple[int, bool, bool]:
+    """``KernelInputs.sense_readout``: the reading's draws from ``rng``, the kernels
+    (``sense``: :meth:`CompiledEpisode.sense_group`; the fleet builds one per robot)."""
     geometry, goal, plates, buffers, encoding, realism, noise, out, codes, flags = sense
     real_on, gaussian, n_raw, n_draws = flags[0] == 1, flags[1] == 1, flags[2], flags[3]
     if real_on:
@@ -278,6 +279,18 @@ def _move(action: int, x: float, y: float, h: float, rng, world: tuple) -> tuple
 
 
 @numba.njit(cache=True)
+def rescue_moves(x: float, y: float, h: float, rng, walls: np.ndarray, distance: float,
+                 radius: float, max_backup: int) -> tuple[float, float, float]:  # fmt: skip
+    """``rescue.rescue_robot``'s moves from ``(x, y, h)``: a random number of Reverse
+    moves (each a :func:`~koolio_pymunk.world.swept_move.sweep` against ``walls``), then a
+    random heading; the draws from ``rng``. Returns the new pose."""
+    backups = rng.integers(0, max_backup + 1)
+    for _ in range(backups):
+        x, y = sweep(walls, x, y, -distance * math.cos(h), -distance * math.sin(h), radius)
+    return x, y, rng.uniform(0.0, _TWO_PI) % _TWO_PI
+
+
+@numba.njit(cache=True)
 def run_steps(
     budget: int, rng, arng, epsilon: float, sense: tuple, world: tuple, task: tuple,
     learner: tuple, index, table: tuple, ints: np.ndarray, floats: np.ndarray,
@@ -314,7 +327,7 @@ def run_steps(
         if lambda_on and explored and _not_greedy(index, q, state, action):
             t_meta[0] = 0  # Watkins's cut
         x, y, h = _move(action, x, y, h, rng, world)
-        nxt, bump, close = _sense(x, y, h, rng, sense)
+        nxt, bump, close = sense_reading(x, y, h, rng, sense)
         if memory_on:
             nxt = _remember(nxt, action, out, memory, mem)
         if action == 0 and close:
@@ -341,12 +354,8 @@ def run_steps(
         state = nxt
         due = not terminated and auto_rescue and bump and steps > rescue_after
         if due and rng.random() < chance:  # rescue.wants_rescue: a draw only when due
-            backups = rng.integers(0, max_backup + 1)
-            for _ in range(backups):
-                x, y = sweep(walls, x, y, -distance * math.cos(h), -distance * math.sin(h),
-                             radius)  # fmt: skip
-            h = rng.uniform(0.0, _TWO_PI) % _TWO_PI
-            state = _sense(x, y, h, rng, sense)[0]
+            x, y, h = rescue_moves(x, y, h, rng, walls, distance, radius, max_backup)
+            state = sense_reading(x, y, h, rng, sense)[0]
             if memory_on:
                 state = _remember(state, -1, out, memory, mem)
             ints[I_RESCUED] = 1
@@ -410,7 +419,7 @@ class CompiledEpisode:
         return sh
 
     def sense_group(self) -> tuple:
-        """:func:`_sense`'s inputs: the suite's kernel groups and buffers, as configured
+        """:func:`sense_reading`'s inputs: the suite's kernel groups and buffers, as configured
         for this episode (a domain-randomization draw may change them at every reset)."""
         k = self.env.sensors.kernel
         flags = np.array(

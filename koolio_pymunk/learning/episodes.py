@@ -68,8 +68,12 @@ def episode_seeds(
     >>> episode_seeds(0, 0)[0] == episode_seeds(0, 0)[0] != episode_seeds(0, 1)[0]
     True
     """
-    env_seed = int(np.random.SeedSequence([seed, episode, stream]).generate_state(1)[0])
-    return env_seed, np.random.default_rng([seed, episode, stream, 1])
+    return env_seed(seed, episode, stream), np.random.default_rng([seed, episode, stream, 1])
+
+
+def env_seed(seed: int, episode: int, stream: int = TRAIN_STREAM) -> int:
+    """The environment seed of :func:`episode_seeds` alone (no agent generator made)."""
+    return int(np.random.SeedSequence([seed, episode, stream]).generate_state(1)[0])
 
 
 @dataclass

@@ -9,20 +9,23 @@ cap). Their experience goes into one :class:`~koolio_pymunk.learning.qtable.QTab
 
 1. every active robot chooses an action epsilon-greedily from the table as it stands
    (:func:`qkernel.choose`);
-2. all robots act in one compiled call (:func:`fleet_kernel.move_all`: turns, and each
-   Forward or Reverse a :func:`~koolio_pymunk.world.swept_move.sweep` against the robot's
-   own copy of the walls, in its copy's coordinates, as the pymunk world moves it, bit
-   for bit); the pymunk bodies are set from those positions before a rescue (which moves
-   through pymunk) and at the end of the run;
-3. all robots are sensed in two compiled calls (:func:`raycast.sense_batch`,
-   :func:`readout.readout_batch`: robots x rays x walls; always the compiled kernel,
-   which reads what the pymunk reference reads);
+2. all robots act (:func:`fleet_kernel.move_all`: turns, and each Forward or Reverse a
+   :func:`~koolio_pymunk.world.swept_move.sweep` against the robot's own copy of the
+   walls, in its copy's coordinates, as the pymunk world moves it, bit for bit); the
+   pymunk bodies are set from those positions at the end of the run;
+3. all robots are sensed (:func:`raycast.sense_batch`, :func:`readout.readout_batch`:
+   robots x rays x walls; always the compiled kernel, which reads what the pymunk
+   reference reads);
 4. **in robot index order**, each robot's step is judged (reward, end of episode),
    its Table 11 update applied to the shared table (so robot ``r`` bootstraps from values
-   robots ``< r`` updated in the same tick), then rescued if auto rescue fires;
-   a finished episode is logged, and the robot starts a new one if the budget allows.
-   :func:`qkernel.learn` does this compiled and hands each rescue draw and episode end
-   to Python in that same order.
+   robots ``< r`` updated in the same tick), then rescued if auto rescue fires
+   (``rescue_robot``'s moves in the robot's copy of the arena); a finished episode is
+   logged, and the robot starts a new one if the budget allows.
+
+Ticks run compiled, many in one call (:func:`fleet_tick.run_ticks`, about :data:`CHUNK`
+robot-steps); Python prepares episode starts ahead and logs the finished episodes, the
+call stopping at the finish that makes a save due (mid-tick if need be) so that every
+save holds the table as it stood at that finish.
 
 **Numbering.** Episodes are numbered in completion order (robot index order within a
 tick), continuing from the table's ``episodes`` count, and logged in the usual CSV
@@ -48,14 +51,15 @@ often and every save is an fsynced file write), and always at the end and on Ctr
 finishes, so after a SIGKILL the log may be ahead of the table by up to ``save_every - 1``
 rows: resuming removes them (:mod:`koolio_pymunk.store.episode_log`).
 
-**Ctrl-C** (taken between ticks) folds every unfinished episode into the table and logs
-it ``interrupted``, numbered ``first + finished``, ``+ 1``, ... in robot order (the numbers
-those episodes get when training resumes). With ``discard_unfinished`` only the unfinished
-episodes are discarded: every finished episode stays in the table and the log. The robots
-share one table, so an unfinished episode's writes are interleaved with those of
-episodes that finished; each robot journals its own writes (:func:`qkernel.undo_writes`),
-and the discard takes back, newest first, every write of an unfinished episode that no
-other robot has written over since (and drops the rows only they created), then saves.
+**Ctrl-C** (taken between two compiled calls, so between ticks) folds every unfinished
+episode into the table and logs it ``interrupted``, numbered ``first + finished``,
+``+ 1``, ... in robot order (the numbers those episodes get when training resumes). With
+``discard_unfinished`` only the unfinished episodes are discarded: every finished episode
+stays in the table and the log. The robots share one table, so an unfinished episode's
+writes are interleaved with those of episodes that finished; each robot journals its own
+writes (:func:`qkernel.undo_writes`), and the discard takes back, newest first, every
+write of an unfinished episode that no other robot has written over since (and drops the
+rows only they created), then saves.
 
 **Algorithm.** One-step Q only (``learner.algorithm: q``): Q(lambda) and Dyna-Q
 (``docs/learning.md``) are refused with a one-line error, since the compiled loop has
@@ -72,38 +76,51 @@ import numba
 import numpy as np
 import pymunk.batch
 
-from ..sensing.encoding_kernel import readout, readout_batch
-from ..sensing.ray_kernel import new_trig, sense_batch, sense_one
+from ..sensing.ray_kernel import new_trig
 from ..sensing.sensor_arrays import GEOMETRY, bundle
 from ..store.errors import ConfigError, KoolioError, located
 from ..store.interrupts import SafeInterrupt
 from ..store.realism_config import realism_on
 from ..task.env import KoolioEnv
-from ..task.rescue import rescue_robot
-from ..world.physics import Action, World
+from ..world.physics import TWO_PI, World
 from ..world.segment_query import wall_array
-from .episodes import INTERRUPTED, TRUNCATED, EpisodeResult, episode_seeds
+from .episode_kernel import TRUNCATED_CODE
+from .episodes import INTERRUPTED, TRUNCATED, EpisodeResult, env_seed
 from .fleet_kernel import (
-    AT_CAP,
     EVENTS,
-    RESCUE_DRAW,
-    TERMINAL,
     SharedTable,
-    choose,
-    learn,
-    move_all,
     new_journal,
     reward_array,
     undo_writes,
-    update_logged,
     zone_arrays,
+)
+from .fleet_tick import (
+    C_BUDGET,
+    C_CURSOR,
+    C_PREPARED,
+    C_RECORDS,
+    C_STARTED,
+    C_STOP_AT,
+    C_TAIL,
+    C_TICKS,
+    N_CTL,
+    NEED_ROOM,
+    R_BUMPS,
+    R_OUTCOME,
+    R_RESCUED,
+    R_START,
+    R_STEPS,
+    TICKS_DONE,
+    generator_list,
+    run_ticks,
+    set_generator,
 )
 from .qtable import QTableStore
 from .training import Progress, RunFiles, TrainResult
 
-STOP = int(Action.STOP)
-FORWARD = int(Action.FORWARD)
-REVERSE = int(Action.REVERSE)
+#: Robot-steps per compiled call at most (Python looks for a Ctrl-C and reports between
+#: calls): ``CHUNK // N`` ticks.
+CHUNK = 4096
 
 
 class PoseReader:
@@ -180,40 +197,14 @@ class Fleet:
         self.geometry = bundle(GEOMETRY, self.k, walls=self.walls)
         """The sensing kernel's geometry group, with this world's walls."""
 
-    def sense_all(
-        self, xy: np.ndarray, headings: list[float], draws: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """State key of every robot, and their Bump and goal-close flags (``N x 2``)."""
+    def group(self) -> tuple:
+        """:func:`fleet_tick.run_ticks`'s ``sensing`` group (the ideal world's reading:
+        the realism group is there for its type only)."""
         k = self.k
-        xs, ys = np.ascontiguousarray(xy[:, 0]), np.ascontiguousarray(xy[:, 1])
-        hs = np.asarray(headings, dtype=np.float64)
-        sense_batch(xs, ys, hs, self.geometry, self.goals, self.raw, self.rays, self.eow_k,
-                    self.trig)  # fmt: skip
-        readout_batch(self.raw, draws, k.encoding, self.out, self.eow_k, self.codes, self.keys,
-                      self.flags)  # fmt: skip
-        return self.keys, self.flags
-
-    def sense_one(self, r: int, rng: np.random.Generator) -> tuple[int, bool, bool]:
-        """Robot ``r`` alone (after a reset or a rescue), noise from ``rng``."""
-        k = self.k
-        x, y, h = self.world.pose(r)
-        buffers = (self.raw[r], self.rays[r], self.eow_k[r], self.trig[r], k.ray_cos, k.decoy)
-        sense_one(x, y, h, self.geometry, self.goals[r], k.plates, buffers)
-        draws = self.suite.draw_noise(rng, k.n_raw)
-        return readout(self.raw[r], draws, k.encoding, self.out[r], self.eow_k[r], self.codes[r])
-
-
-class _Episode:
-    """What Python keeps of one robot's running episode (counters live in arrays)."""
-
-    __slots__ = ("epsilon", "goal", "rescued", "rng", "start")
-
-    def __init__(self, start: int, rng: np.random.Generator, epsilon: float, goal: str) -> None:
-        self.start = start
-        self.rng = rng
-        self.epsilon = epsilon
-        self.goal = goal
-        self.rescued = False
+        flags = np.array([0, int(k.gaussian), k.n_raw, 0], np.int64)
+        return (self.geometry, k.encoding, self.goals, self.raw, self.rays, self.eow_k,
+                self.trig, self.out, self.codes, self.keys, self.flags, k.plates, k.ray_cos,
+                k.decoy, k.realism, k.noise, flags)  # fmt: skip
 
 
 def train_many(
@@ -234,6 +225,14 @@ def train_many(
     run = _Run(env, store, episodes, seed, log_path, robots, save_every, discard_unfinished)
     run.files.save_seconds = save_seconds
     return run.run(discard_unfinished, report, report_every)
+
+
+def _generators(n: int):
+    """A typed list of ``n`` distinct generators (their states are set before use)."""
+    out = generator_list(np.random.default_rng(0), n)
+    for i in range(n):
+        set_generator(out, i, np.random.Generator(np.random.PCG64(i)))
+    return out
 
 
 class _Run:
@@ -283,91 +282,121 @@ class _Run:
         self.seed = seed
         self.n = robots
         self.world = World.from_arena(env.arena, cfg.robot.radius, robots)
-        self.copy_walls = np.stack([wall_array(self.world, k) for k in range(robots)])
-        """Every robot's copy of the walls (``move_all``)."""
-        self.offsets = np.asarray(self.world.offsets, dtype=np.float64)
+        copy_walls = np.stack([wall_array(self.world, k) for k in range(robots)])
+        offsets = np.asarray(self.world.offsets, dtype=np.float64)
         self.copy_xy = np.array([self.world.copy_position(k) for k in range(robots)])
         """Every robot's body position in its copy (the compiled moves keep it; the pymunk
-        bodies are set from it before a rescue and at the end)."""
-        self.motion = (float(env.move_distance), float(env.turn_arc), float(cfg.robot.radius))
+        bodies are set from it at the end)."""
+        self.headings = np.array(self.world.heading, dtype=np.float64)
+        self.xy = np.zeros((robots, 2))
+        """Every robot's position as of its last move, start or rescue."""
+        motion = (float(env.move_distance), float(env.turn_arc), float(cfg.robot.radius))
+        self.motion = (self.copy_xy, self.headings, copy_walls, offsets, motion, self.xy)
         self.fleet = Fleet(env, self.world)
         self.progress = Progress()
         self.results: list[EpisodeResult] = []
-        self.tick_rng = np.random.default_rng([seed, robots, 2])
-        self.started = 0
         self.finished = 0
-        self.eps: list[_Episode | None] = [None] * robots
-        # Per robot, for the compiled loop (qkernel): state key, activity, epsilon,
-        # this episode's steps, bumps, return, and the last step's event code.
+        # Per robot, for the compiled ticks (fleet_tick): state key, activity, epsilon,
+        # action, rescued, start number; this episode's steps, bumps, return, last event.
         self.state = np.zeros(robots, np.int64)
         self.active = np.zeros(robots, np.bool_)
         self.epsilon = np.zeros(robots)
+        self.rescued = np.zeros(robots, np.bool_)
+        self.start_of = np.zeros(robots, np.int64)
+        self.robots = (self.state, self.active, self.epsilon, np.zeros(robots, np.int64),
+                       self.rescued, self.start_of)  # fmt: skip
         self.steps = np.zeros(robots, np.int64)
         self.bumps = np.zeros(robots, np.int64)
         self.total = np.zeros(robots)
-        self.event = np.zeros(robots, np.int64)
-        self.actions = np.zeros(robots, np.int64)
-        self.xy = np.zeros((robots, 2))
-        """Every robot's position as of its last move, reset or rescue."""
-        self.reward = reward_array(cfg.rewards)
-        rescue = cfg.rescue
-        self.rescue_after = rescue.max_steps_before_rescue if rescue.auto_rescue_toggle else -1
-        self.zones = zone_arrays(env.zones)
+        self.counters = (self.steps, self.bumps, self.total, np.zeros(robots, np.int64))
+        lc, rescue = cfg.learner, cfg.rescue
+        rescue_after = rescue.max_steps_before_rescue if rescue.auto_rescue_toggle else -1
+        self.rules = (reward_array(cfg.rewards), float(lc.alpha), float(lc.gamma),
+                      zone_arrays(env.zones), int(rescue_after),
+                      int(cfg.episode.max_steps))  # fmt: skip
+        self.rescue = (float(rescue.rescue_chance), int(rescue.rescue_max_backup))
         cap = cfg.episode.max_steps
         self.journal = new_journal(robots, (cap + 1 if cap > 0 else 1024) if journal else 0)
         """Every robot's writes in its running episode (:func:`qkernel.update_logged`)."""
+        self.tick_rng = np.random.default_rng([seed, robots, 2])
+        self._starts(robots)
 
     # -- episodes ---------------------------------------------------------------------
-    def _start(self, r: int) -> None:
-        """Start episode number ``first + started`` on robot ``r`` (or idle it)."""
-        if self.started >= self.budget:
-            self.eps[r] = None
-            self.active[r] = False
-            return
-        k = self.first + self.started
-        self.started += 1
-        env, world = self.env, self.world
-        rng = np.random.default_rng(episode_seeds(self.seed, k)[0])
-        names = env.world_arena.goal_names()
-        goal = names[int(rng.integers(len(names)))] if env.random_goal else env.goal_name
-        self.fleet.goals[r] = env.world_arena.goal(goal).at
-        ep = _Episode(k, rng, self.cfg.learner.epsilon.at(k), goal)
-        start = env.world_arena.start
-        heading = (
-            np.radians(start.heading_deg)
-            if start.heading_deg is not None
-            else float(rng.uniform(0.0, 2.0 * np.pi))
-        )
-        world.place(r, start.at, float(heading))
-        self.xy[r] = world.pose(r)[:2]
-        self.copy_xy[r] = world.copy_position(r)
-        self.state[r] = self.fleet.sense_one(r, rng)[0]
-        self.active[r] = True
-        self.epsilon[r] = ep.epsilon
-        self.steps[r] = self.bumps[r] = 0
-        self.total[r] = 0.0
-        self.journal[2][r] = 0
-        self.eps[r] = ep
+    def _starts(self, robots: int) -> None:
+        """The slots of prepared starts (:mod:`.fleet_tick`), the records of finished
+        episodes, and every robot waiting for its first start."""
+        slots = max(2 * robots, 16)
+        self.pool = _generators(slots)
+        self.gens = _generators(robots)
+        self.slot_goal = np.zeros((slots, 2))
+        self.slot_heading = np.zeros(slots)
+        self.slot_epsilon = np.zeros(slots)
+        start = np.array(self.env.world_arena.start.at, dtype=np.float64)
+        self.starts = (self.slot_goal, self.slot_heading, self.slot_epsilon, start)
+        self.prepared: dict[int, tuple[str, float]] = {}
+        """The goal and epsilon of every start prepared and not yet finished, by start
+        number."""
+        capacity = max(64, robots)
+        self.records = (np.zeros((capacity, 6), np.int64), np.zeros(capacity))
+        self.ctl = np.zeros(N_CTL, np.int64)
+        self.ctl[C_CURSOR] = robots
+        self.ctl[C_BUDGET] = self.budget
+        self.pending = np.arange(robots, dtype=np.int64)
+        self.ctl[C_TAIL] = robots
 
-    def _finish(self, r: int, outcome: str) -> None:
-        ep = self.eps[r]
-        assert ep is not None
-        e = self.first + self.finished
-        self.finished += 1
-        res = EpisodeResult(
-            e,
-            float(self.total[r]),
-            int(self.steps[r]),
-            int(self.bumps[r]),
-            outcome,
-            ep.rescued,
-            ep.epsilon,
-            ep.goal,
-        )
-        self.files.finished(res, save=self.finished == self.budget)
-        self.results.append(res)
-        self.progress.add(res)
-        self._start(r)
+    def _prepare(self) -> None:
+        """Prepare the starts the next call may make: the episode's generator
+        (``default_rng(episode_seeds(seed, k)[0])``'s state), its random goal and start
+        heading drawn from it, its epsilon."""
+        ctl, env = self.ctl, self.env
+        slots = len(self.pool)
+        names = env.world_arena.goal_names()
+        start = env.world_arena.start
+        until = min(int(ctl[C_STARTED]) + slots, self.budget)
+        for s in range(int(ctl[C_PREPARED]), until):
+            k = self.first + s
+            slot = s % slots
+            rng = self.pool[slot]  # a finished episode's generator, or one not used yet
+            rng.bit_generator.state = np.random.PCG64(env_seed(self.seed, k)).state
+            goal = names[int(rng.integers(len(names)))] if env.random_goal else env.goal_name
+            heading = (
+                np.radians(start.heading_deg)
+                if start.heading_deg is not None
+                else float(rng.uniform(0.0, 2.0 * np.pi))
+            )
+            epsilon = self.cfg.learner.epsilon.at(k)
+            self.slot_goal[slot] = env.world_arena.goal(goal).at
+            self.slot_heading[slot] = float(heading) % TWO_PI  # World.place
+            self.slot_epsilon[slot] = epsilon
+            self.prepared[s] = (goal, epsilon)
+        ctl[C_PREPARED] = max(until, int(ctl[C_PREPARED]))
+
+    def _record(self) -> None:
+        """Log the episodes the last call finished (completion order), saving the table
+        when due (the call stopped at the finish that makes a save due)."""
+        ints, totals = self.records
+        n = int(self.ctl[C_RECORDS])
+        self.ctl[C_RECORDS] = 0
+        outcomes = ints[:n, R_OUTCOME].tolist()
+        for k, (start, steps, bumps, rescued) in enumerate(
+            ints[:n, [R_START, R_STEPS, R_BUMPS, R_RESCUED]].tolist()
+        ):
+            code = outcomes[k]
+            goal, epsilon = self.prepared.pop(start)
+            res = EpisodeResult(
+                self.first + self.finished,
+                float(totals[k]),
+                steps,
+                bumps,
+                TRUNCATED if code == TRUNCATED_CODE else EVENTS[code],
+                bool(rescued),
+                epsilon,
+                goal,
+            )
+            self.finished += 1
+            self.files.finished(res, save=self.finished == self.budget)
+            self.results.append(res)
+            self.progress.add(res)
 
     # -- the loop -----------------------------------------------------------------------
     def run(
@@ -381,15 +410,14 @@ class _Run:
         try:
             with SafeInterrupt() as guard:
                 try:
-                    for r in range(self.n):
-                        self._start(r)
                     while self.finished < self.budget:
                         guard.check()
-                        self._tick()
+                        self._ticks()
                         now = time.perf_counter()
                         if report and now - last_report >= report_every:
-                            eps = [ep.epsilon for ep in self.eps if ep is not None]
-                            report(self._line(eps[0] if eps else 0.0))
+                            running = np.flatnonzero(self.active)
+                            eps = float(self.epsilon[running[0]]) if running.size else 0.0
+                            report(self._line(eps))
                             last_report = now
                     if report:
                         last = self.first + self.budget - 1
@@ -399,8 +427,10 @@ class _Run:
                     self._interrupt(discard_unfinished, report)
         finally:
             self.files.close()
-            for k in range(self.n):  # the pymunk bodies where the compiled moves left them
-                self.world.set_copy_position(k, *self.copy_xy[k])
+            world = self.world  # the pymunk bodies where the compiled moves left them
+            for k in range(self.n):
+                world.set_copy_position(k, *self.copy_xy[k])
+            world.heading[:] = self.headings.tolist()
         self.shared.sync()
         p = self.progress
         return TrainResult(
@@ -418,7 +448,7 @@ class _Run:
         return self.progress.line(done, self.first + self.budget, epsilon) + f"  robots {self.n}"
 
     def _interrupt(self, discard: bool, report: Callable[[str], None] | None) -> None:
-        running = [r for r, ep in enumerate(self.eps) if ep is not None]
+        running = np.flatnonzero(self.active).tolist()
         if discard:
             self._discard(running)
             if report:
@@ -428,17 +458,16 @@ class _Run:
                 )
             return
         for k, r in enumerate(running):
-            ep = self.eps[r]
-            assert ep is not None
+            goal, epsilon = self.prepared[int(self.start_of[r])]
             res = EpisodeResult(
                 self.first + self.finished + k,
                 float(self.total[r]),
                 int(self.steps[r]),
                 int(self.bumps[r]),
                 INTERRUPTED,
-                ep.rescued,
-                ep.epsilon,
-                ep.goal,
+                bool(self.rescued[r]),
+                epsilon,
+                goal,
             )
             self.files.log.write(res)
             self.results.append(res)
@@ -450,46 +479,37 @@ class _Run:
         """Exit Without Save: take back the unfinished episodes' writes, save the rest."""
         jn = self.journal[2]
         if any(int(jn[r]) > self.journal[0].shape[1] for r in running):  # pragma: no cover
-            raise AssertionError("journal overflow")  # _tick grows it before it can happen
+            raise AssertionError("journal overflow")  # _ticks grows it before it can happen
         dropped = undo_writes(self.shared, self.journal, running)
         self.shared.sync()
         for key in dropped:
             self.table.rows.pop(key, None)
         self.files.save()
 
-    def _tick(self) -> None:
-        n, rng, sh = self.n, self.tick_rng, self.shared
-        self._grow_journal()
-        explore = rng.random(n)
-        random_action = rng.integers(self.table.layout.n_actions, size=n)
-        tie = rng.random(n)
-        draws = self.fleet.suite.draw_noise(rng, n * self.fleet.k.n_raw).reshape(n, -1)
-        sh.reserve(2 * n)
-        choose(sh.index, sh.q, self.state, self.active, self.epsilon, explore, random_action,
-               tie, self.actions)  # fmt: skip
-        world = self.world
-        headings = np.array(world.heading)
-        move_all(self.actions, self.copy_xy, headings, self.copy_walls, self.offsets,
-                 self.motion, self.xy)  # fmt: skip
-        world.heading[:] = headings.tolist()
-        xy = self.xy
-        keys, flags = self.fleet.sense_all(xy, headings, draws)
-        lc = self.cfg.learner
-        tick = (self.active, self.actions, self.state, keys, flags[:, 0], flags[:, 1], xy)
-        rules = (self.reward, lc.alpha, lc.gamma, self.zones, self.rescue_after,
-                 self.cfg.episode.max_steps)  # fmt: skip
-        counters = (self.steps, self.bumps, self.total, self.event)
-        table = sh.args()
-        r = 0
-        while r < n:
-            r, why = learn(r, tick, rules, counters, self.journal, sh.index, table)
-            if why == RESCUE_DRAW:
-                self._rescue_step(r, int(keys[r]))
-            elif why == TERMINAL:
-                self._finish(r, EVENTS[self.event[r]])
-            elif why == AT_CAP:
-                self._finish(r, TRUNCATED)
-            r += 1
+    def _ticks(self) -> None:
+        """Compiled ticks (:func:`fleet_tick.run_ticks`), about :data:`CHUNK` robot-steps,
+        ending between two ticks (or at the run's last finished episode): each stop on the
+        way for Python (finished episodes, starts to prepare, room) is served here."""
+        ctl, sh = self.ctl, self.shared
+        ctl[C_TICKS] = 0
+        ticks = max(1, CHUNK // self.n)
+        capacity = self.records[0].shape[0]
+        while self.finished < self.budget:
+            self._prepare()
+            until_save = self.files.save_every - self.files.unsaved
+            if self.files.save_seconds is not None:
+                until_save = 1  # the clock is looked at every finished episode
+            ctl[C_STOP_AT] = max(1, min(until_save, self.budget - self.finished, capacity))
+            why = run_ticks(ticks, self.tick_rng, self.gens, self.pool, ctl, self.pending,
+                            self.fleet.group(), self.motion, self.robots, self.counters,
+                            self.rules, self.rescue, self.starts, self.records, self.journal,
+                            sh.index, sh.args())  # fmt: skip
+            self._record()
+            if why == NEED_ROOM:
+                sh.reserve(2 * self.n)
+                self._grow_journal()
+            elif why == TICKS_DONE:
+                return
 
     def _grow_journal(self) -> None:
         """Room for one more entry per robot (one update per robot per tick)."""
@@ -501,26 +521,3 @@ class _Run:
         grown[0][:, :cap] = jint
         grown[1][:, :cap] = jf
         self.journal = (grown[0], grown[1], jn, seq)
-
-    def _rescue_step(self, r: int, nxt: int) -> None:
-        """Robot ``r`` bumped past ``max_steps_before_rescue``: its update (from the state
-        the action led to), then the rescue draw, maybe a rescue (new reading), and the
-        step cap, in the paper's order (§5.4.8) as in ``KoolioEnv``."""
-        ep = self.eps[r]
-        assert ep is not None
-        lc = self.cfg.learner
-        code = int(self.event[r])
-        update_logged(self.shared.index, self.shared.args(), lc.alpha, lc.gamma, int(self.state[r]),
-                      int(self.actions[r]), float(self.reward[code]), nxt, False, r,
-                      self.journal)  # fmt: skip
-        if ep.rng.random() < self.cfg.rescue.rescue_chance:
-            self.world.set_copy_position(r, *self.copy_xy[r])
-            rescue_robot(self.world, r, self.cfg.rescue, self.env.move_distance, ep.rng)
-            self.xy[r] = self.world.pose(r)[:2]
-            self.copy_xy[r] = self.world.copy_position(r)
-            nxt = self.fleet.sense_one(r, ep.rng)[0]
-            ep.rescued = True
-        self.state[r] = nxt
-        cap = self.cfg.episode.max_steps
-        if cap > 0 and self.steps[r] >= cap:
-            self._finish(r, TRUNCATED)

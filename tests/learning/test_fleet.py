@@ -9,6 +9,7 @@ import math
 import numpy as np
 import pytest
 
+from koolio_pymunk.learning import fleet
 from koolio_pymunk.learning.fleet import PoseReader, _Run, train_many
 from koolio_pymunk.learning.qtable import QTableStore, load_qtable
 from koolio_pymunk.learning.training import LOG_FIELDS
@@ -75,15 +76,16 @@ def test_save_every_one_saves_at_every_episode_end(tmp_path, monkeypatch) -> Non
 
 def test_ctrl_c_folds_unfinished_episodes(tmp_path, monkeypatch) -> None:
     calls = {"n": 0}
-    tick = _Run._tick
+    ticks = _Run._ticks
 
     def interrupting(self):
         calls["n"] += 1
         if calls["n"] == 30:
             raise KeyboardInterrupt
-        tick(self)
+        ticks(self)
 
-    monkeypatch.setattr(_Run, "_tick", interrupting)
+    monkeypatch.setattr(fleet, "CHUNK", 1)  # one tick per compiled call
+    monkeypatch.setattr(_Run, "_ticks", interrupting)
     q, log, res = run(tmp_path, "a", episodes=50, robots=3)
     assert res.interrupted
     rows = list(csv.DictReader(log.open()))
