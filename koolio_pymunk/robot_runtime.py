@@ -189,6 +189,9 @@ class Encoder:
         mem = enc.get("memory") or {}
         self.memory = {k: mem.get(k, v) for k, v in NO_MEMORY.items()}
         """The memory's settings (``encoding.memory``; all off when absent)."""
+        if self.memory["goal_bearing"]:
+            self.memory["turn_deg"] = float(mem["turn_deg"])
+            self.memory["camera_deg"] = [float(d) for d in mem["camera_deg"]]
 
     def fields(self) -> list[tuple[str, int]]:
         """``(name, levels)`` of the state fields: the sensors', then the memory's."""
@@ -203,13 +206,16 @@ class Encoder:
         out += [("GoalMemory", self.n_camera + 1)] if mem["goal_camera"] else []
         out += [("EoWMemory", self.n_camera + 1)] if mem["eow_camera"] else []
         out += [("LastAction", len(ACTION_NAMES) + 1)] if mem["previous_action"] else []
+        out += [("GoalBearing", len(BEARINGS))] if mem["goal_bearing"] else []
         return out
 
     @property
     def remembers(self) -> bool:
         """The state holds memory fields (:class:`Memory`)."""
         m = self.memory
-        return bool(m["goal_camera"] or m["eow_camera"] or m["previous_action"])
+        return bool(
+            m["goal_camera"] or m["eow_camera"] or m["previous_action"] or m["goal_bearing"]
+        )
 
     def encode(
         self,
@@ -278,7 +284,13 @@ NO_MEMORY: dict[str, Any] = {
     "eow_camera": False,
     "forget_after": 0,
     "previous_action": False,
+    "goal_bearing": False,
 }
+#: ``encoding.memory``'s keys when ``goal_bearing`` is on: the rotation's arc and the
+#: cameras' angles, degrees (the bearing turns with the commanded turns).
+BEARING_KEYS = ("turn_deg", "camera_deg")
+#: ``GoalBearing``'s codes (the simulator's ``store.config.BEARINGS``).
+BEARINGS = ("none", "ahead", "left", "behind", "right")
 
 
 class Memory:
@@ -288,7 +300,9 @@ class Memory:
     ``GoalMemory`` / ``EoWMemory``: the camera that last saw the goal plate / an
     end-of-world marker (0: none; ``1 + camera``; the nearest reading when several see it,
     ties to the lower camera), forgotten after ``forget_after`` steps without a sighting
-    (0: never); ``LastAction``: 0 at the start of an episode, then ``1 + action``. Call
+    (0: never); ``LastAction``: 0 at the start of an episode, then ``1 + action``;
+    ``GoalBearing``: where the goal plate was last seen, turned with the commanded turns
+    (:func:`bearing_code` of the millidegrees; 0: none, forgotten like the sightings). Call
     :meth:`reset` at the start of every episode; :meth:`Policy.encode` updates it with each
     reading (``action`` None after a reset or a rescue: sightings are recorded, nothing
     ages, the last action stays).
@@ -296,28 +310,42 @@ class Memory:
 
     def __init__(self, encoder: Encoder) -> None:
         self.encoder = encoder
+        mem = encoder.memory
+        self.camera_mdeg = [millidegrees(d) for d in mem.get("camera_deg", [])]
+        self.turn_mdeg = millidegrees(mem.get("turn_deg", 0.0))
         self.reset()
 
     def reset(self) -> None:
         """A new episode: nothing seen, no action yet."""
-        self.goal = self.eow = self.action = 0
-        self.goal_age = self.eow_age = 0
+        self.goal = self.eow = self.action = self.bearing = 0
+        self.goal_age = self.eow_age = self.bearing_age = self.bearing_mdeg = 0
 
     def update(self, goal: Sequence[Any], eow: Sequence[Any], action: int | None) -> None:
         """Remember one reading made after ``action``."""
         moved = action is not None
-        self.goal, self.goal_age = self._sighting(goal, self.goal, self.goal_age, moved)
-        self.eow, self.eow_age = self._sighting(eow, self.eow, self.eow_age, moved)
+        seen = self._nearest(goal)
+        self.goal, self.goal_age = self._sighting(seen, self.goal, self.goal_age, moved)
+        self.eow, self.eow_age = self._sighting(self._nearest(eow), self.eow, self.eow_age, moved)
+        if self.encoder.memory["goal_bearing"]:
+            if seen:
+                self.bearing_mdeg = self.camera_mdeg[seen - 1]
+            elif moved and self.bearing:
+                self.bearing_mdeg = turned(self.bearing_mdeg, int(action), self.turn_mdeg)  # type: ignore[arg-type]
+            held, self.bearing_age = self._sighting(seen, self.bearing, self.bearing_age, moved)
+            self.bearing = bearing_code(self.bearing_mdeg) if held else 0
         if moved:
             self.action = 1 + int(action)  # type: ignore[arg-type]
 
-    def _sighting(self, readings: Sequence[Any], held: int, age: int, moved: bool) -> tuple:
+    def _nearest(self, readings: Sequence[Any]) -> int:
         best, best_d = 0, math.inf
         for c, d in enumerate(readings):
             if self.encoder.sees(d) and d < best_d:
                 best, best_d = 1 + c, d
-        if best:
-            return best, 0
+        return best
+
+    def _sighting(self, seen: int, held: int, age: int, moved: bool) -> tuple:
+        if seen:
+            return seen, 0
         if not moved or not held:
             return held, age
         age += 1
@@ -330,7 +358,43 @@ class Memory:
         out = [self.goal] if mem["goal_camera"] else []
         out += [self.eow] if mem["eow_camera"] else []
         out += [self.action] if mem["previous_action"] else []
+        out += [self.bearing] if mem["goal_bearing"] else []
         return tuple(out)
+
+
+def millidegrees(deg: float) -> int:
+    """An angle in whole millidegrees (the bearing's unit in every copy)."""
+    return round(deg * 1000.0)
+
+
+def turned(bearing: int, action: int, turn: int) -> int:
+    """``bearing`` (millidegrees, left positive) after ``action`` (RotateLeft subtracts
+    ``turn``, RotateRight adds it), in [-180, 180) degrees.
+
+    >>> turned(90_000, 1, 30_000), turned(170_000, 2, 30_000)
+    (60000, -160000)
+    """
+    if action == ACTION_NAMES.index("RotateLeft"):
+        bearing -= turn
+    elif action == ACTION_NAMES.index("RotateRight"):
+        bearing += turn
+    return (bearing + 180_000) % 360_000 - 180_000
+
+
+def bearing_code(bearing: int) -> int:
+    """The quarter of ``bearing`` (millidegrees): 1 ahead (within 45 degrees of the
+    front), 2 left (45 to 135), 3 behind, 4 right.
+
+    >>> [bearing_code(b) for b in (0, 44_999, 45_000, 134_999, 135_000, -135_000, -45_000)]
+    [1, 1, 2, 2, 3, 3, 4]
+    """
+    if -45_000 < bearing < 45_000:
+        return 1
+    if 45_000 <= bearing < 135_000:
+        return 2
+    if -135_000 < bearing <= -45_000:
+        return 4
+    return 3
 
 
 class Policy:
@@ -618,6 +682,15 @@ _KNOWN_KEYS = frozenset(
 )
 
 
+def memory_json(mem: dict[str, Any]) -> dict[str, Any]:
+    """``encoding.memory`` of a document: ``goal_bearing`` and its keys only when on (the
+    documents written before the bearing existed keep their bytes)."""
+    out = {k: v for k, v in mem.items() if k not in ("goal_bearing", *BEARING_KEYS)}
+    if mem["goal_bearing"]:
+        out |= {"goal_bearing": True} | {k: mem[k] for k in BEARING_KEYS}
+    return out
+
+
 def encoding_json(enc: Encoder) -> dict[str, Any]:
     """The ``encoding`` section of a document."""
     return {
@@ -627,7 +700,7 @@ def encoding_json(enc: Encoder) -> dict[str, Any]:
         "n_camera": enc.n_camera,
         "max_camera_view": enc.max_camera_view,
         "compass_in_state": enc.compass_in_state,
-        **({"memory": dict(enc.memory)} if enc.remembers else {}),
+        **({"memory": memory_json(enc.memory)} if enc.remembers else {}),
         "levels": {
             "sonar": list(_level_names(("Bump", "Close", "Medium", "Far"), enc.sonar_thresholds)),
             "camera": list(_level_names(("Close", "Medium", "Far"), enc.camera_thresholds)),
@@ -909,7 +982,7 @@ def _check_encoding(doc: dict[str, Any], source: str) -> None:
         raise _err(source, "encoding.max_camera_view", "must be a finite number")
     if not isinstance(enc.get("compass_in_state"), bool):
         raise _err(source, "encoding.compass_in_state", "must be true or false")
-    _check_memory(enc.get("memory", NO_MEMORY), source)
+    _check_memory(enc.get("memory", NO_MEMORY), source, enc["n_camera"])
     encoder = Encoder(enc)
     for name, ts in (("sonar", encoder.sonar_thresholds), ("camera", encoder.camera_thresholds)):
         if not ts or any(b <= a for a, b in itertools.pairwise(ts)):
@@ -929,13 +1002,28 @@ def _check_encoding(doc: dict[str, Any], source: str) -> None:
 MAX_FORGET_AFTER = 10_000
 
 
-def _check_memory(mem: Any, source: str) -> None:
+def _check_memory(mem: Any, source: str, n_camera: int) -> None:
     """``encoding.memory``: the memory's settings (:data:`NO_MEMORY`'s keys)."""
-    if not isinstance(mem, dict) or set(mem) - set(NO_MEMORY):
-        raise _err(source, "encoding.memory", f"must map {', '.join(NO_MEMORY)}")
-    for key in ("goal_camera", "eow_camera", "previous_action"):
+    if not isinstance(mem, dict) or set(mem) - set(NO_MEMORY) - set(BEARING_KEYS):
+        raise _err(source, "encoding.memory", f"must map {', '.join((*NO_MEMORY, *BEARING_KEYS))}")
+    for key in ("goal_camera", "eow_camera", "previous_action", "goal_bearing"):
         if not isinstance(mem.get(key, False), bool):
             raise _err(source, f"encoding.memory.{key}", "must be true or false")
+    if mem.get("goal_bearing", False):
+        turn = mem.get("turn_deg")
+        if not is_number(turn) or not 0 < turn < 360:
+            raise _err(source, "encoding.memory.turn_deg", "must be a number in (0, 360)")
+        cams = mem.get("camera_deg")
+        if (
+            not isinstance(cams, list)
+            or len(cams) != n_camera
+            or not all(is_number(d) and abs(d) <= 360 for d in cams)
+        ):
+            raise _err(
+                source,
+                "encoding.memory.camera_deg",
+                f"must be a list of {n_camera} angles in [-360, 360] (one per camera)",
+            )
     k = mem.get("forget_after", 0)
     if not _is_int(k) or not 0 <= k <= MAX_FORGET_AFTER:
         raise _err(

@@ -126,6 +126,8 @@ def policy_document(
     }
     if isinstance(sensors.get("memory"), dict):
         encoding["memory"] = dict(sensors["memory"])
+        if encoding["memory"].get("goal_bearing"):  # the cameras the bearing starts from
+            encoding["memory"]["camera_deg"] = [float(d) for d in sensors["camera_sensors_deg"]]
     lay = table.layout
     doc: dict[str, Any] = {
         "format": rt.FORMAT,

@@ -57,6 +57,7 @@ import numba
 import numpy as np
 
 from ..sensing.encoding_kernel import readout
+from ..sensing.memory import FULL_TURN_MDEG, QUARTER_MDEG, ROTATE_LEFT, ROTATE_RIGHT
 from ..sensing.ray_kernel import sense_one
 from ..sensing.realism_kernel import sense_realism
 from ..task.env import WRONG_DOOR, KoolioEnv
@@ -147,17 +148,24 @@ def _act(state: int, epsilon: float, arng, n_actions: int, index, q: np.ndarray)
 
 
 @numba.njit(cache=True)
-def _sighting(out: np.ndarray, first: int, memory: tuple, held: int, age: int, moved: bool):
-    """``Memory._sighting``: the camera that sees the target nearest (``out[first:]``, the
-    cameras' readings), else the held one aged by a move of the robot's own."""
-    n_camera, far, forget = memory[1], memory[2], memory[3]
+def _nearest(out: np.ndarray, first: int, memory: tuple) -> int:
+    """``Memory._nearest``: the camera that sees the target nearest (``out[first:]``, the
+    cameras' readings; 0: none, else ``1 + c``)."""
+    n_camera, far = memory[1], memory[2]
     best, best_d = 0, far
     for c in range(n_camera):
         d = out[first + c]
         if d < best_d:
             best, best_d = 1 + c, d
-    if best:
-        return best, 0
+    return best
+
+
+@numba.njit(cache=True)
+def _sighting(seen: int, forget: int, held: int, age: int, moved: bool):
+    """``Memory._sighting``: the camera that sees the target now, else the held one aged
+    by a move of the robot's own."""
+    if seen:
+        return seen, 0
     if not moved or not held:
         return held, age
     age += 1
@@ -167,19 +175,47 @@ def _sighting(out: np.ndarray, first: int, memory: tuple, held: int, age: int, m
 
 
 @numba.njit(cache=True)
+def _bearing_code(bearing: int) -> int:
+    """``memory.bearing_code``."""
+    if -QUARTER_MDEG < bearing < QUARTER_MDEG:
+        return 1
+    if QUARTER_MDEG <= bearing < 3 * QUARTER_MDEG:
+        return 2
+    if -3 * QUARTER_MDEG < bearing <= -QUARTER_MDEG:
+        return 4
+    return 3
+
+
+@numba.njit(cache=True)
 def _remember(key: int, action: int, out: np.ndarray, memory: tuple, mem: np.ndarray) -> int:
     """``Memory.update`` after a reading (``action`` -1: a rescue's, no move of the
     robot's own) and ``Memory.key``: the state key with the memory's codes after
-    ``key``. ``mem`` = goal, end of world, action, goal's age, end of world's age;
-    ``memory`` = ``(n_sonar, n_camera, far, forget_after, fields on, their bits)``."""
-    n_sonar, n_camera, on, bits = memory[0], memory[1], memory[4], memory[5]
+    ``key``. ``mem`` = goal, end of world, action, bearing (codes), then the goal's, end
+    of world's and bearing's ages and the bearing in millidegrees; ``memory`` =
+    ``(n_sonar, n_camera, far, forget_after, fields on, their bits, cameras'
+    millidegrees, turn millidegrees)``."""
+    n_sonar, n_camera, forget, on, bits = memory[0], memory[1], memory[3], memory[4], memory[5]
     moved = action >= 0
-    mem[0], mem[3] = _sighting(out, n_sonar, memory, mem[0], mem[3], moved)
-    mem[1], mem[4] = _sighting(out, n_sonar + n_camera, memory, mem[1], mem[4], moved)
+    seen = _nearest(out, n_sonar, memory)
+    mem[0], mem[4] = _sighting(seen, forget, mem[0], mem[4], moved)
+    eow = _nearest(out, n_sonar + n_camera, memory)
+    mem[1], mem[5] = _sighting(eow, forget, mem[1], mem[5], moved)
+    if on[3]:
+        if seen:
+            mem[7] = memory[6][seen - 1]
+        elif moved and mem[3]:
+            b = mem[7]
+            if action == ROTATE_LEFT:
+                b -= memory[7]
+            elif action == ROTATE_RIGHT:
+                b += memory[7]
+            mem[7] = (b + FULL_TURN_MDEG // 2) % FULL_TURN_MDEG - FULL_TURN_MDEG // 2
+        held, mem[6] = _sighting(seen, forget, mem[3], mem[6], moved)
+        mem[3] = _bearing_code(mem[7]) if held else 0
     if moved:
         mem[2] = 1 + action
     k = 0
-    for field in range(3):
+    for field in range(4):
         if on[field]:
             key = (key << bits[k]) | mem[field]
             k += 1
@@ -408,7 +444,7 @@ class CompiledEpisode:
             self.lam = (True, float(agent.decay), float(agent.cutoff))
         self.traces = _empty_traces(0)
         self.memory = self._memory_group()
-        self.mem = np.zeros(5, np.int64)
+        self.mem = np.zeros(8, np.int64)
 
     def table(self) -> SharedTable:
         """The agent's table as arrays, rebuilt if the table changed size behind it."""
@@ -480,22 +516,27 @@ class CompiledEpisode:
         """:func:`_remember`'s configuration: no fields when the memory is off."""
         env = self.env
         cfg = env.memory.cfg
-        on = np.array([cfg.goal_camera, cfg.eow_camera, cfg.previous_action], np.bool_)
+        on = np.array(
+            [cfg.goal_camera, cfg.eow_camera, cfg.previous_action, cfg.goal_bearing], np.bool_
+        )
         bits = np.array(env.layout.bits[len(env.sensors.levels) :], np.int64)
         if not env.memory.on:
             bits = bits[:0]
         sensors = env.sensors
+        cameras = np.array(env.memory.camera_mdeg or [0], np.int64)
         return (int(sensors.n_sonar), int(sensors.n_camera), float(sensors.far),
-                int(cfg.forget_after), on, bits)  # fmt: skip
+                int(cfg.forget_after), on, bits, cameras, int(env.memory.turn_mdeg))  # fmt: skip
 
     def _memory_in(self) -> None:
         m = self.env.memory
-        self.mem[:] = (m.goal, m.eow, m.action, m._goal_age, m._eow_age)
+        self.mem[:] = (m.goal, m.eow, m.action, m.bearing, m._goal_age, m._eow_age,
+                       m._bearing_age, m.bearing_mdeg)  # fmt: skip
 
     def _memory_out(self) -> None:
         """The memory as the Python steps leave it (``env.codes`` reads it)."""
         m = self.env.memory
-        m.goal, m.eow, m.action, m._goal_age, m._eow_age = (int(v) for v in self.mem)
+        (m.goal, m.eow, m.action, m.bearing, m._goal_age, m._eow_age, m._bearing_age,
+         m.bearing_mdeg) = (int(v) for v in self.mem)  # fmt: skip
 
     def _traces_in(self, sh: SharedTable) -> None:
         """Q(lambda)'s traces and expected state from the agent (empty at an episode's

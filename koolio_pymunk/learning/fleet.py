@@ -43,6 +43,11 @@ without a new episode to start stand still.
   (``--goal random``), the start heading, the first reading's noise, and every auto-rescue
   draw of that episode.
 
+**Resuming** starts N new episodes from the saved table and a new run generator: a
+resumed run is seeded (the same commands give the same bytes) but is not the
+uninterrupted run's continuation, whose robots were mid-episode at the save
+(``docs/robustness.md``; one robot resumes exactly).
+
 **Saving.** The table is written (file + backup, as :func:`training.train` does) each
 time ``save_every`` more episodes have finished (default ``N``: about once per round of
 episodes rather than at every episode end, because N robots finish episodes N times as
@@ -254,7 +259,7 @@ class _Run:
                 "has no realism models) and this configuration turns realism on: use --robots 1"
             )
         mem = cfg.sensors.memory
-        if mem.goal_camera or mem.eow_camera or mem.previous_action:
+        if mem.on:
             raise ConfigError(
                 located(
                     f"--robots {robots}",

@@ -714,13 +714,19 @@ def sensor_signature(cfg: Config) -> dict[str, Any]:
             "camera_thresholds": list(ca.thresholds),
             "compass_in_state": s.compass.in_state,
         }
-        | _memory_signature(s.memory)
+        | _memory_signature(s.memory, cfg.actions.rotate_action_arc_deg)
     )
 
 
-def _memory_signature(mem: MemoryConfig) -> dict[str, Any]:
+def _memory_signature(mem: MemoryConfig, turn_deg: float) -> dict[str, Any]:
     """The memory's part of a sensor signature: nothing when it is off (the tables of
-    memoryless runs stay as they were)."""
-    if not (mem.goal_camera or mem.eow_camera or mem.previous_action):
+    memoryless runs stay as they were); with ``goal_bearing`` also the rotation's arc
+    ``turn_deg`` it turns by."""
+    if not mem.on:
         return {}
-    return {"memory": dataclasses.asdict(mem)}
+    fields = dataclasses.asdict(mem)
+    if mem.goal_bearing:
+        fields["turn_deg"] = turn_deg
+    else:  # a field added later: tables without it keep their bytes
+        del fields["goal_bearing"]
+    return {"memory": fields}

@@ -146,6 +146,10 @@ class CompassConfig:
     """Add the N/E/S/W compass code to the state (the paper dropped it)."""
 
 
+#: ``GoalBearing``'s codes: where the goal plate was last seen, from the robot now.
+BEARINGS = ("none", "ahead", "left", "behind", "right")
+
+
 @dataclass
 class MemoryConfig:
     """A few bits of the robot's own recent history added to the state (not in the paper;
@@ -166,6 +170,16 @@ class MemoryConfig:
     previous_action: bool = False
     """Add the action taken last (none at the start of an episode, then Stop ...
     Reverse): ``LastAction``, 6 levels."""
+    goal_bearing: bool = False
+    """Add where the goal plate was last seen, turned with the robot's own turns (dead
+    reckoning on the commanded turns): none, ahead, left, behind or right of the robot
+    now: ``GoalBearing``, 5 levels. Forgotten like the cameras' sightings
+    (``forget_after``)."""
+
+    @property
+    def on(self) -> bool:
+        """Any memory field in the state."""
+        return self.goal_camera or self.eow_camera or self.previous_action or self.goal_bearing
 
 
 @dataclass
@@ -717,6 +731,7 @@ def memory_fields(cfg: SensorConfig) -> list[tuple[str, int]]:
     fields = [("GoalMemory", n_cam + 1)] if mem.goal_camera else []
     fields += [("EoWMemory", n_cam + 1)] if mem.eow_camera else []
     fields += [("LastAction", N_ACTIONS + 1)] if mem.previous_action else []
+    fields += [("GoalBearing", len(BEARINGS))] if mem.goal_bearing else []
     return fields
 
 

@@ -163,7 +163,13 @@ class KoolioEnv(gym.Env):
         )
         fields = state_fields(self.config.sensors)
         self.layout = KeywordLayout(tuple(fields))
-        self.memory = Memory(self.config.sensors.memory, self.sensors.n_camera, self.sensors.far)
+        self.memory = Memory(
+            self.config.sensors.memory,
+            self.sensors.n_camera,
+            self.sensors.far,
+            camera_deg=self.config.sensors.camera.camera_sensors_deg,
+            turn_deg=self.config.actions.rotate_action_arc_deg,
+        )
         """What the robot remembers in its state (``sensors.memory``; off by default)."""
         self._memory_bits = self.layout.bits[len(self.sensors.levels) :]
         self.action_space = spaces.Discrete(len(ACTION_NAMES))

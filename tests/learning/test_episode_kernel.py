@@ -38,9 +38,18 @@ EVERY_MEMORY = {
             "eow_camera": True,
             "previous_action": True,
             "forget_after": 3,
+            "goal_bearing": True,
         }
     }
 }
+#: The paper's cameras with the goal's bearing in the state (turns of 30 and 45 degrees).
+PAPER_BEARING = {
+    "sensors": {
+        "camera": {"camera_sensors_deg": [0.0, 90.0, -90.0]},
+        "memory": {"goal_bearing": True},
+    }
+}
+BEARING_45 = {**PAPER_BEARING, "actions": {"rotate_action_arc_deg": 45.0}}
 
 
 @pytest.mark.parametrize(
@@ -60,6 +69,8 @@ EVERY_MEMORY = {
         ("hallway", None, PAPER_MEMORY),
         ("room", "koolio-real", {**EVERY_MEMORY, **EAGER_RESCUE}),
         ("hallway", None, {**PAPER_MEMORY, **QLAMBDA}),
+        ("hallway", None, PAPER_BEARING),
+        ("hallway", "koolio-real", BEARING_45),
     ],
 )
 def test_compiled_episodes_match_the_python_loop(arena, world, overrides):

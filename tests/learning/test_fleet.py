@@ -44,6 +44,19 @@ def test_seeded_run_is_reproducible_and_seed_matters(tmp_path) -> None:
     assert qa.read_bytes() != qc.read_bytes()
 
 
+def test_a_resumed_run_is_seeded_but_not_the_straight_run(tmp_path) -> None:
+    """Resuming is reproducible (the same two commands, the same bytes); it is not the
+    uninterrupted run, whose robots were mid-episode at the save (docs/robustness.md)."""
+    for name in ("a", "b"):
+        run(tmp_path, name, episodes=6, robots=3)
+        run(tmp_path, name, episodes=6, robots=3)
+    straight, _, _ = run(tmp_path, "c", episodes=12, robots=3)
+    a, b = (tmp_path / "a.qtable").read_bytes(), (tmp_path / "b.qtable").read_bytes()
+    assert a == b
+    assert (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()
+    assert a != straight.read_bytes()
+
+
 def test_episodes_numbered_in_completion_order_and_logged(tmp_path) -> None:
     q, log, res = run(tmp_path, "a", episodes=7, robots=3)
     rows = list(csv.DictReader(log.open()))

@@ -51,6 +51,42 @@ def test_previous_action_and_reset() -> None:
     assert mem.codes == (0,)
 
 
+def test_bearing_turns_with_the_robot_and_is_forgotten() -> None:
+    """A plate seen by the right camera (-90), then turns and moves: the quarters of
+    -90, -60, -30 (right, right, ahead), a Forward keeps it, RotateRight turns it back."""
+    cfg = MemoryConfig(goal_bearing=True, forget_after=5)
+    mem = Memory(cfg, 3, FAR, camera_deg=[0.0, 90.0, -90.0], turn_deg=30.0)
+    mem.reset()
+    assert mem.update(NONE, NONE, None).codes == (0,)  # nothing seen: none
+    assert mem.update(NONE, NONE, 2).codes == (0,)  # turning turns nothing
+    assert mem.update([FAR, FAR, 40.0], NONE, 3).codes == (4,)
+    assert mem.bearing_mdeg == -90_000
+    assert [mem.update(NONE, NONE, 2).codes for _ in range(2)] == [(4,), (1,)]
+    assert mem.bearing_mdeg == -30_000
+    assert mem.update(NONE, NONE, 3).codes == (1,)
+    assert mem.update(NONE, NONE, None).codes == (1,)  # a rescue: no turn, no ageing
+    assert mem.update(NONE, NONE, 1).codes == (4,)  # RotateLeft: -60
+    assert mem.update(NONE, NONE, 1).codes == (0,)  # the fifth step unseen: forgotten
+    assert mem.update([30.0, FAR, FAR], NONE, 1).codes == (1,)  # the front camera
+    keeps = Memory(MemoryConfig(goal_bearing=True), 3, FAR, [0.0, 90.0, -90.0], 30.0)
+    keeps.reset()
+    keeps.update([30.0, FAR, FAR], NONE, None)
+    for _ in range(6):
+        keeps.update(NONE, NONE, 2)  # six right turns of 30: +180 wraps to -180, behind
+    assert keeps.bearing_mdeg == -180_000 and keeps.codes == (3,)
+
+
+def test_bearing_field_and_signature() -> None:
+    over = {"sensors": {"memory": {"goal_bearing": True}}, "actions": {"rotate_action_arc_deg": 45}}
+    cfg = load_config(overrides=over)
+    env = KoolioEnv("room", config=cfg)
+    assert env.layout.fields[-1] == ("GoalBearing", 5)
+    assert sensor_signature(cfg)["memory"]["goal_bearing"] is True
+    assert sensor_signature(cfg)["memory"]["turn_deg"] == 45.0
+    paper = sensor_signature(load_config("paper-memory"))["memory"]
+    assert "goal_bearing" not in paper and "turn_deg" not in paper  # older tables' bytes
+
+
 def test_memory_fields_follow_the_sensors_in_the_keyword() -> None:
     cfg = load_config(overrides={"sensors": {"memory": ALL}})
     env = KoolioEnv("room", config=cfg)
@@ -114,12 +150,14 @@ def test_many_robots_refuse_memory_in_one_line(tmp_path, capsys) -> None:
     assert "sensors.memory" in capsys.readouterr().err
 
 
-def test_runtime_memory_gives_the_simulators_keys(tmp_path) -> None:
+@pytest.mark.parametrize("bearing", [False, True])
+def test_runtime_memory_gives_the_simulators_keys(tmp_path, bearing) -> None:
     """An episode with every memory field on, forgetting after 4 steps: the runtime's
     memory, fed the env's raw readings, gives the env's state key at every step, rescues
     included; a policy exported from a memory table keeps its memory settings."""
+    fields = ALL | {"forget_after": 4} | ({"goal_bearing": True} if bearing else {})
     overrides = {
-        "sensors": {"memory": ALL | {"forget_after": 4}},
+        "sensors": {"memory": fields},
         "episode": {"max_steps": 150},
         "rescue": {"max_steps_before_rescue": 0, "rescue_chance": 0.3},
     }
@@ -128,11 +166,12 @@ def test_runtime_memory_gives_the_simulators_keys(tmp_path) -> None:
     store = QTableStore(tmp_path / "m.qtable")
     train(env, store, 2, seed=1, report=None)
     doc = policy_document(store.open(env.layout, sensor_signature(cfg), -30.0), cfg)
-    assert doc["encoding"]["memory"] == ALL | {"forget_after": 4}
+    extra = {"turn_deg": 30.0, "camera_deg": [0.0, 45.0, -45.0]} if bearing else {}
+    assert doc["encoding"]["memory"] == fields | extra
     policy = rt.Policy(doc)
     mem = policy.new_memory()
     rng = np.random.default_rng(0)
-    seen = {"goal": 0, "rescues": 0}
+    seen = {"goal": 0, "rescues": 0, "bearings": set()}
     for step in range(600):
         if step % 150 == 0:
             env.reset(seed=5 + step)
@@ -146,12 +185,15 @@ def test_runtime_memory_gives_the_simulators_keys(tmp_path) -> None:
         codes = policy.encode(r.sonar, r.goal, r.eow, memory=mem, action=action)
         assert policy.state_key(codes) == env.state_key
         seen["goal"] += mem.goal > 0
+        seen["bearings"].add(mem.bearing)
         if env.rescue_check():
             seen["rescues"] += 1
             r = env.readings
             codes = policy.encode(r.sonar, r.goal, r.eow, memory=mem)
             assert policy.state_key(codes) == env.state_key
     assert seen["rescues"] > 0 and seen["goal"] > 0  # the premise: both were exercised
+    if bearing:
+        assert len(seen["bearings"]) >= 4  # none and at least three quarters
     with pytest.raises(rt.PolicyError, match="memory"):
         policy.encode(r.sonar, r.goal, r.eow)
 
@@ -182,3 +224,29 @@ def test_the_loop_learns_with_memory() -> None:
 def test_config_error_names_the_item() -> None:
     with pytest.raises(ConfigError, match=r"sensors\.memory\.forget_after"):
         load_config(overrides={"sensors": {"memory": {"forget_after": -2}}})
+
+
+@pytest.mark.parametrize(
+    ("change", "item"),
+    [
+        ({"turn_deg": 0}, "encoding.memory.turn_deg"),
+        ({"turn_deg": "30"}, "encoding.memory.turn_deg"),
+        ({"camera_deg": [0.0, 90.0]}, "encoding.memory.camera_deg"),
+        ({"camera_deg": [0.0, 90.0, float("nan")]}, "encoding.memory.camera_deg"),
+        ({"goal_bearing": 1}, "encoding.memory.goal_bearing"),
+        ({"bearing_size": 4}, "encoding.memory"),
+    ],
+)
+def test_a_bad_bearing_in_a_policy_is_one_line(tmp_path, change, item) -> None:
+    """The runtime refuses a policy whose bearing settings it could not follow."""
+    over = {"sensors": {"memory": {"goal_bearing": True}}, "episode": {"max_steps": 30}}
+    cfg = load_config(overrides=over)
+    env = KoolioEnv("room", config=cfg)
+    store = QTableStore(tmp_path / "b.qtable")
+    train(env, store, 1, seed=0, report=None)
+    doc = policy_document(store.open(env.layout, sensor_signature(cfg), -30.0), cfg)
+    rt.Policy(doc)  # the premise: the exported policy loads
+    doc["encoding"]["memory"].update(change)
+    with pytest.raises(rt.PolicyError) as err:
+        rt.Policy(doc)
+    assert item in str(err.value) and "\n" not in str(err.value)

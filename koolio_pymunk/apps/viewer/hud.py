@@ -20,6 +20,7 @@ import numpy as np
 import pygame
 
 from ...sensing.suite import compass_code
+from ...store.config import BEARINGS
 from ...store.keyword import CAMERA_LEVELS, COMPASS_LEVELS, SONAR_LEVELS
 from ...task.env import KoolioEnv
 from ...world.physics import ACTION_NAMES
@@ -261,6 +262,11 @@ def memory_rows(env: KoolioEnv) -> list[HudRow]:
     if cfg.previous_action:
         last = "none" if mem.action == 0 else ACTION_NAMES[mem.action - 1]
         rows.append(HudRow("LastAction", "", last, ""))
+    if cfg.goal_bearing:
+        where = BEARINGS[mem.bearing]
+        if mem.bearing:
+            where += f" ({mem.bearing_mdeg / 1000:+.0f} deg)"
+        rows.append(HudRow("GoalBearing", "", where, "goal, dead reckoned"))
     return rows
 
 
