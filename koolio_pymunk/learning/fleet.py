@@ -8,12 +8,12 @@ cap). Their experience goes into one :class:`~koolio_pymunk.learning.qtable.QTab
 **A tick** (every robot takes one step):
 
 1. every active robot chooses an action epsilon-greedily from the table as it stands
-   (:func:`qkernel.choose`);
+   (:func:`fleet_kernel.choose`);
 2. all robots act (:func:`fleet_kernel.move_all`: turns, and each Forward or Reverse a
    :func:`~koolio_pymunk.world.swept_move.sweep` against the robot's own copy of the
    walls, in its copy's coordinates, as the pymunk world moves it, bit for bit); the
    pymunk bodies are set from those positions at the end of the run;
-3. all robots are sensed (:func:`raycast.sense_batch`, :func:`readout.readout_batch`:
+3. all robots are sensed (:func:`~koolio_pymunk.sensing.ray_kernel.sense_batch`, :func:`~koolio_pymunk.sensing.encoding_kernel.readout_batch`:
    robots x rays x walls; always the compiled kernel, which reads what the pymunk
    reference reads);
 4. **in robot index order**, each robot's step is judged (reward, end of episode),
@@ -62,7 +62,7 @@ episode into the table and logs it ``interrupted``, numbered ``first + finished`
 ``discard_unfinished`` only the unfinished episodes are discarded: every finished episode
 stays in the table and the log. The robots share one table, so an unfinished episode's
 writes are interleaved with those of episodes that finished; each robot journals its own
-writes (:func:`qkernel.undo_writes`), and the discard takes back, newest first, every
+writes (:func:`fleet_kernel.undo_writes`), and the discard takes back, newest first, every
 write of an unfinished episode that no other robot has written over since (and drops the
 rows only they created), then saves.
 
@@ -273,7 +273,7 @@ class _Run:
                     f"--robots {robots}",
                     "learner.algorithm",
                     f"{cfg.learner.algorithm} learns with one robot only: the compiled "
-                    "many-robot loop (qkernel) has one-step Q only (use --robots 1)",
+                    "many-robot loop (fleet_kernel) has one-step Q only (use --robots 1)",
                 )
             )
         self.env, self.cfg = env, cfg
@@ -322,7 +322,7 @@ class _Run:
         self.rescue = (float(rescue.rescue_chance), int(rescue.rescue_max_backup))
         cap = cfg.episode.max_steps
         self.journal = new_journal(robots, (cap + 1 if cap > 0 else 1024) if journal else 0)
-        """Every robot's writes in its running episode (:func:`qkernel.update_logged`)."""
+        """Every robot's writes in its running episode (:func:`fleet_kernel.update_logged`)."""
         self.tick_rng = np.random.default_rng([seed, robots, 2])
         self._starts(robots)
 

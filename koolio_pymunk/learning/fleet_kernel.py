@@ -1,4 +1,4 @@
-"""Compiled learning loop for many robots sharing one Q-table (used by :mod:`multi`).
+"""Compiled learning loop for many robots sharing one Q-table (used by :mod:`~koolio_pymunk.learning.fleet`).
 
 :class:`SharedTable` mirrors a :class:`~koolio_pymunk.learning.qtable.QTable` in arrays a
 compiled loop can use: a typed dict from state key to row, a ``(capacity, n_actions)``
@@ -6,7 +6,7 @@ array of values and a dirty flag per row; :meth:`SharedTable.sync` writes the di
 back into the ``QTable`` (before every save). The kernels:
 
 * :func:`choose`: every active robot's epsilon-greedy action, from the per-tick draws
-  (exploration, random action, tie-break), exactly as ``multi`` describes;
+  (exploration, random action, tie-break), exactly as ``fleet`` describes;
 * :func:`learn`: in robot index order, each robot's reward (paper §5.4.7: goal >
   end of world > bump > action), episode counters and Table 11 update; it stops at a
   robot that needs Python (an auto-rescue draw, or the end of its episode) and returns
@@ -20,7 +20,10 @@ back into the ``QTable`` (before every save). The kernels:
 
 Same float64 operations in the same order as the Python code they replace (QTable.row /
 peek, QLearner.update, rules.judge, EndZones.contains, geometry.locate_point);
-``tests/learning/test_fleet.py`` checks a compiled run against the Python reference loop.
+``tests/learning/test_fleet.py`` holds each kernel to the Python code it replaces
+(choose and update to the learner, learn to the rules, in_zone to ``EndZones``,
+``move_all`` to the pymunk world); a whole many-robot run has no Python twin (its
+seeded bytes are checked run to run).
 """
 
 from __future__ import annotations

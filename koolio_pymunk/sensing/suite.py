@@ -60,7 +60,7 @@ from ..world.physics import World
 from .realism import SensorRealism, apply_reference
 from .sensor_arrays import BUFFERS, ENCODING, GEOMETRY, REALISM, bundle
 
-# The compiled kernels (raycast.py, readout.py) import numba, which takes a large part of
+# The compiled kernels (ray_kernel.py, encoding_kernel.py) import numba, which takes a large part of
 # a second to load: they are imported when a SensorSuite is made, not with this module, so
 # `import koolio_pymunk` and the commands that need no sensing (info, check-arena, export,
 # plot) stay light.
@@ -436,7 +436,7 @@ class Geometry:
 class KernelInputs:
     """Arrays and buffers of one :class:`SensorSuite` for the compiled kernels.
 
-    ``sense(x, y, h, raw, rays, eow_k, ray_cos, decoy)`` is :func:`raycast.sense_one`;
+    ``sense(x, y, h, raw, rays, eow_k, ray_cos, decoy)`` is :func:`~koolio_pymunk.sensing.ray_kernel.sense_one`;
     ``sense_readout(pose, rng)`` adds the noise draws, the realism models
     (:func:`realism_kernel.apply_realism`, when one is on) and :func:`readout.readout`.
     """
