@@ -13,7 +13,7 @@ cap). Their experience goes into one :class:`~koolio_pymunk.learning.qtable.QTab
    :func:`~koolio_pymunk.world.swept_move.sweep` against the robot's own copy of the
    walls, in its copy's coordinates, as the pymunk world moves it, bit for bit); the
    pymunk bodies are set from those positions at the end of the run;
-3. all robots are sensed (:func:`~koolio_pymunk.sensing.ray_kernel.sense_batch`, :func:`~koolio_pymunk.sensing.encoding_kernel.readout_batch`:
+3. all robots are sensed (:func:`ray_kernel.sense_batch`, :func:`encoding_kernel.readout_batch`:
    robots x rays x walls; always the compiled kernel, which reads what the pymunk
    reference reads);
 4. **in robot index order**, each robot's step is judged (reward, end of episode),

@@ -1,4 +1,4 @@
-"""Compiled learning loop for many robots sharing one Q-table (used by :mod:`~koolio_pymunk.learning.fleet`).
+"""Compiled learning loop for many robots sharing one Q-table (used by :mod:`.fleet`).
 
 :class:`SharedTable` mirrors a :class:`~koolio_pymunk.learning.qtable.QTable` in arrays a
 compiled loop can use: a typed dict from state key to row, a ``(capacity, n_actions)``

@@ -436,9 +436,9 @@ class Geometry:
 class KernelInputs:
     """Arrays and buffers of one :class:`SensorSuite` for the compiled kernels.
 
-    ``sense(x, y, h, raw, rays, eow_k, ray_cos, decoy)`` is :func:`~koolio_pymunk.sensing.ray_kernel.sense_one`;
+    ``sense(x, y, h, raw, rays, eow_k, ray_cos, decoy)`` is :func:`ray_kernel.sense_one`;
     ``sense_readout(pose, rng)`` adds the noise draws, the realism models
-    (:func:`realism_kernel.apply_realism`, when one is on) and :func:`readout.readout`.
+    (:func:`realism_kernel.apply_realism`, when one is on) and :func:`encoding_kernel.readout`.
     """
 
     def __init__(self, s: SensorSuite) -> None:
