@@ -49,6 +49,11 @@ from .realism import (
     P_Z_SHORT,
 )
 
+#: :func:`~.ray_kernel.sense_one` and :func:`~.encoding_kernel.readout` compiled into
+#: :func:`sense_realism` itself (the same Python functions, inlined).
+_sense_one = numba.njit(cache=True, inline="always")(sense_one.py_func)
+_readout = numba.njit(cache=True, inline="always")(readout.py_func)
+
 
 @numba.njit(cache=True, inline="always")
 def _gaussian(u1: float, u2: float) -> float:
@@ -231,7 +236,7 @@ def sense_realism(x: float, y: float, h: float, geometry: tuple, goal: np.ndarra
         for i in range(m):
             noise[i] = -1.0 + 2.0 * u[i]
         base = m
-    sense_one(x, y, h, geometry, goal, plates[:0], buffers)
+    _sense_one(x, y, h, geometry, goal, plates[:0], buffers)
     far = params[2]
     misread_on, misread_chance = rflags[F_MISREAD], rparams[P_MISREAD]
     for c in range(camera_dirs.shape[0]):
@@ -241,4 +246,4 @@ def sense_realism(x: float, y: float, h: float, geometry: tuple, goal: np.ndarra
             decoy[c] = camera_reading(x, y, direction, plates, params[3], params[1], far, walls)[0]
     _sonar(raw, rays, ray_cos, u, base, rparams, rflags, neighbours, echo, crossed)
     _cameras(raw, n_sonar, decoy, u, base, rparams, rflags, missed, misread)
-    return readout(raw, noise, encoding, out, eow_k, codes)
+    return _readout(raw, noise, encoding, out, eow_k, codes)
