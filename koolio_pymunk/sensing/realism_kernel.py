@@ -11,6 +11,16 @@ one call, finding the other plates in view only for a camera whose misread draw 
 (the reference finds them for every camera; only those are used).
 The parameter layout (``params``, ``flags``) is
 :class:`koolio_pymunk.sensing.realism.SensorRealism`'s.
+
+**One compiled function per reading.** A numba call that passes arrays increments and
+decrements each array's reference count, an atomic operation: with the models in
+functions of their own, a third of a realistic reading's perf samples were in
+``NRT_incref``/``NRT_decref`` (``docs/speed.md``). So the models' helpers are compiled inline
+into their caller (``inline="always"``), and :func:`sense_realism` holds inline twins of
+:func:`~.ray_kernel.sense_one` and :func:`~.encoding_kernel.readout` (the same Python
+functions compiled a second time); the draws are read at an offset (``base``) instead
+of through a view. The arithmetic is the same operations in the same order (no
+fastmath), so the readings are the same bits.
 """
 
 from __future__ import annotations
@@ -50,7 +60,7 @@ from .realism import (
 )
 
 #: :func:`~.ray_kernel.sense_one` and :func:`~.encoding_kernel.readout` compiled into
-#: :func:`sense_realism` itself (the same Python functions, inlined).
+#: :func:`sense_realism` itself (the same Python functions, inlined; never called alone).
 _sense_one = numba.njit(cache=True, inline="always")(sense_one.py_func)
 _readout = numba.njit(cache=True, inline="always")(readout.py_func)
 
@@ -221,11 +231,12 @@ def sense_realism(x: float, y: float, h: float, geometry: tuple, goal: np.ndarra
 
     :func:`raycast.sense_one` (without other plates), then, per camera whose misread
     draw ``u[4 n + 3 c] < misread``, the nearest of ``plates`` in its arc and in sight
-    (``decoy``; far for the others), :func:`apply_realism` with the uniforms ``u``, and
-    :func:`readout.readout` with the noise draws ``noise``. With ``noise_from_u`` (the
-    uniform noise model) ``u`` holds both, from one generator call: first the readings'
-    uniforms, turned into ``noise`` as ``rng.uniform(-1, 1)`` turns them (``-1 + 2 u``),
-    then the realism uniforms."""
+    (``decoy``; far for the others), :func:`apply_realism`'s models with the uniforms
+    ``u``, and :func:`readout.readout` with the noise draws ``noise``. With
+    ``noise_from_u`` (the uniform noise model) ``u`` holds both, from one generator call
+    (or as many scalar draws: the same values): first the readings' uniforms, turned into
+    ``noise`` as ``rng.uniform(-1, 1)`` turns them (``-1 + 2 u``), then the realism
+    uniforms."""
     params, camera_dirs, walls = geometry[1], geometry[2], geometry[4]
     raw, rays, eow_k, _, ray_cos, decoy = buffers
     rparams, rflags, neighbours, echo, crossed, missed, misread = realism
