@@ -32,7 +32,8 @@ Sections (each printed as a table row, all written to ``--out`` as JSON):
   reports its own peak RSS (:func:`peak_rss_mib`) and its Q-table's size next to the
   paper's dense 113.9 MiB;
 * **cost per step**: the compiled episode's step taken apart, each part timed in a
-  compiled loop over the same recorded poses (:func:`step_costs`);
+  compiled loop over the same recorded poses (:func:`step_costs`), in the ideal world
+  and in ``koolio-real``;
 * **profile**: cProfile of the fast single-robot loop (compiled), top 10 functions by own
   time;
 * **agreement**: fast vs reference sensing on a sample of random poses per arena
@@ -292,14 +293,15 @@ def motion(poses: int, repeats: int = 5) -> dict:
     return out_rows
 
 
-def step_costs(poses: int, step_us: float, repeats: int = 3) -> dict:
+def step_costs(poses: int, step_us: float, repeats: int = 3, world: str | None = None) -> dict:
     """Microseconds per robot-step of the compiled episode's parts, each in a compiled
     loop (best of ``repeats``) replaying ``poses`` steps of a seeded learning run in the
     hallway (the poses before each step, in order, so the ray directions' cache works as
-    in a run): the reading (rays, cameras, noise draws, encoding), the move of each step's
-    action, epsilon-greedy and the Table 11 update on the states read; ``step_us`` is the
-    whole step (the compiled loop's CPU time per step) and the rest is judge, rescue
-    check and the loop."""
+    in a run): the reading (rays, cameras, noise draws, encoding; in ``world``, e.g.
+    ``koolio-real``, with its realism models), the move of each step's action (with the
+    world's motion errors), epsilon-greedy and the Table 11 update on the states read;
+    ``step_us`` is the whole step (the compiled loop's CPU time per step) and the rest is
+    judge, rescue check, the loop and Python between episodes."""
     import numba
     import numpy as np
 
@@ -327,7 +329,7 @@ def step_costs(poses: int, step_us: float, repeats: int = 3) -> dict:
             a = _act(keys[i], 0.15, arng, 5, index, table[0])[0]
             update(index, table, 0.2, 0.9, keys[i], a, rewards[i], keys[i + 1], False)
 
-    env = make_env("fast")
+    env = make_env("fast", world=world)
     table = QTable(env.layout, {}, env.config.learner.q_init)
     agent = make_learner(table, env.config.learner, None)
     ce = CompiledEpisode(env, agent)
@@ -630,13 +632,16 @@ def main(argv: list[str] | None = None) -> int:
 
         report["algorithms"] = algorithms_section(q)
 
-        step_us = 1e6 * fast["cpu_s"] / max(1, fast["steps"])
-        sc = report["step_costs"] = step_costs(5_000 if q else 20_000, step_us)
-        print(
-            f"  one compiled step, us per robot-step (CPU): {sc['step_us']:.2f} = reading "
-            f"{sc['sense_us']:.2f} + move {sc['move_us']:.2f} + act and learn "
-            f"{sc['act_learn_us']:.2f} + judge, rescue and the loop {sc['rest_us']:.2f}"
-        )
+        parts = (("step_costs", fast, None), ("step_costs_koolio_real", real, "koolio-real"))
+        for key, row, world in parts:
+            step_us = 1e6 * row["cpu_s"] / max(1, row["steps"])
+            sc = report[key] = step_costs(5_000 if q else 20_000, step_us, world=world)
+            print(
+                f"  one compiled step{' in koolio-real' if world else ''}, us per robot-step "
+                f"(CPU): {sc['step_us']:.2f} = reading {sc['sense_us']:.2f} + move "
+                f"{sc['move_us']:.2f} + act and learn {sc['act_learn_us']:.2f} + judge, "
+                f"rescue and the loop {sc['rest_us']:.2f}"
+            )
 
         comp = []
         for s in seeds:

@@ -104,15 +104,20 @@ def why_not(env: KoolioEnv, agent: object, learn: bool = True) -> str | None:
 @numba.njit(cache=True)
 def sense_reading(x: float, y: float, h: float, rng, sense: tuple) -> tuple[int, bool, bool]:
     """``KernelInputs.sense_readout``: the reading's draws from ``rng``, the kernels
-    (``sense``: :meth:`CompiledEpisode.sense_group`; the fleet builds one per robot)."""
-    geometry, goal, plates, buffers, encoding, realism, noise, out, codes, flags = sense
+    (``sense``: :meth:`CompiledEpisode.sense_group`; the fleet builds one per robot). With
+    realism models on, the draws go one by one into the buffer ``u`` (the generator's
+    stream is that of its calls with a size: each value is the next scalar draw)."""
+    geometry, goal, plates, buffers, encoding, realism, noise, out, codes, flags, u = sense
     real_on, gaussian, n_raw, n_draws = flags[0] == 1, flags[1] == 1, flags[2], flags[3]
     if real_on:
         if gaussian:
-            noise[:] = rng.standard_normal(n_raw)
-            u = rng.random(n_draws)
+            for i in range(n_raw):
+                noise[i] = rng.standard_normal()
+            for i in range(n_draws):
+                u[i] = rng.random()
         else:
-            u = rng.random(n_raw + n_draws)
+            for i in range(n_raw + n_draws):
+                u[i] = rng.random()
         return sense_realism(x, y, h, geometry, goal, plates, buffers, noise, u, not gaussian,
                              realism, encoding, out, codes)  # fmt: skip
     sense_one(x, y, h, geometry, goal, plates, buffers)
@@ -302,9 +307,10 @@ def _move(action: int, x: float, y: float, h: float, rng, world: tuple) -> tuple
     sign = 1.0 if action == 3 else -1.0
     turn = sign * drift
     if drift_sigma > 0.0 or slip_sigma > 0.0:
-        e = rng.standard_normal(2)
-        turn += drift_sigma * e[0]
-        distance = max(0.0, distance * (1.0 + slip_sigma * e[1]))
+        e0 = rng.standard_normal()  # MotionErrors.move's standard_normal(2), one by one
+        e1 = rng.standard_normal()
+        turn += drift_sigma * e0
+        distance = max(0.0, distance * (1.0 + slip_sigma * e1))
     d = sign * distance
     if d != 0.0:
         half = 0.5 * turn
@@ -458,11 +464,11 @@ class CompiledEpisode:
         """:func:`sense_reading`'s inputs: the suite's kernel groups and buffers, as configured
         for this episode (a domain-randomization draw may change them at every reset)."""
         k = self.env.sensors.kernel
-        flags = np.array(
-            [int(k.real_on), int(k.gaussian), k.n_raw, self.env.sensors.realism.n_draws]
-        )
+        n_draws = self.env.sensors.realism.n_draws
+        flags = np.array([int(k.real_on), int(k.gaussian), k.n_raw, n_draws])
+        u = np.empty(k.n_raw + n_draws)  # the realism path's draws
         return (k.geometry, k.goal, k.plates, k.buffers, k.encoding, k.realism, k.noise, k.out,
-                k.codes, flags)  # fmt: skip
+                k.codes, flags, u)  # fmt: skip
 
     def world_group(self) -> tuple:
         env = self.env

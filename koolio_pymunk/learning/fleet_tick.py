@@ -87,8 +87,9 @@ def _reading(r: int, rng, sensing: tuple, xy: np.ndarray, headings: np.ndarray) 
     """Robot ``r``'s state key read alone (after a start or a rescue), noise from ``rng``."""
     (geometry, encoding, goals, raw, rays, eow_k, trig, out, codes, _, _, plates, ray_cos, decoy,
      realism, noise, flags) = sensing  # fmt: skip
+    # The fleet runs the ideal world only: the realism draws' buffer (the last) is unused.
     sense = (geometry, goals[r], plates, (raw[r], rays[r], eow_k[r], trig[r], ray_cos, decoy),
-             encoding, realism, noise, out[r], codes[r], flags)  # fmt: skip
+             encoding, realism, noise, out[r], codes[r], flags, noise)  # fmt: skip
     return sense_reading(xy[r, 0], xy[r, 1], headings[r], rng, sense)[0]
 
 

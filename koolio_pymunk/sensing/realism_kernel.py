@@ -11,6 +11,16 @@ one call, finding the other plates in view only for a camera whose misread draw 
 (the reference finds them for every camera; only those are used).
 The parameter layout (``params``, ``flags``) is
 :class:`koolio_pymunk.sensing.realism.SensorRealism`'s.
+
+**One compiled function per reading.** A numba call that passes arrays increments and
+decrements each array's reference count, an atomic operation: with the models in
+functions of their own, a third of a realistic reading's perf samples were in
+``NRT_incref``/``NRT_decref`` (``docs/speed.md``). So the models' helpers are compiled inline
+into their caller (``inline="always"``), and :func:`sense_realism` holds inline twins of
+:func:`~.ray_kernel.sense_one` and :func:`~.encoding_kernel.readout` (the same Python
+functions compiled a second time); the draws are read at an offset (``base``) instead
+of through a view. The arithmetic is the same operations in the same order (no
+fastmath), so the readings are the same bits.
 """
 
 from __future__ import annotations
@@ -49,13 +59,18 @@ from .realism import (
     P_Z_SHORT,
 )
 
+#: :func:`~.ray_kernel.sense_one` and :func:`~.encoding_kernel.readout` compiled into
+#: :func:`sense_realism` itself (the same Python functions, inlined; never called alone).
+_sense_one = numba.njit(cache=True, inline="always")(sense_one.py_func)
+_readout = numba.njit(cache=True, inline="always")(readout.py_func)
 
-@numba.njit(cache=True)
+
+@numba.njit(cache=True, inline="always")
 def _gaussian(u1: float, u2: float) -> float:
     return math.sqrt(-2.0 * math.log(1.0 - u1)) * math.cos(2.0 * math.pi * u2)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _beam(z: float, u0: float, u1: float, u2: float, p: np.ndarray) -> float:
     far = p[P_FAR]
     top_range = p[P_RANGE]
@@ -77,70 +92,78 @@ def _beam(z: float, u0: float, u1: float, u2: float, p: np.ndarray) -> float:
     return u1 * top_range
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _detect(d: float, p: np.ndarray) -> float:
     near = p[P_DETECT_NEAR]
     return near + (p[P_DETECT_FAR] - near) * min(d / p[P_VIEW], 1.0)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _sonar(
     raw: np.ndarray,
     rays: np.ndarray,
     ray_cos: np.ndarray,
     draws: np.ndarray,
+    base: int,
     p: np.ndarray,
     f: np.ndarray,
     neighbours: np.ndarray,
     echo: np.ndarray,
     crossed: np.ndarray,
 ) -> None:
+    """The sonar models; sonar ``s``'s draws are ``draws[base + 4 s : base + 4 s + 4]``.
+    The nearest echo goes straight into ``raw`` (only when a sonar model is on)."""
     n, n_sub = rays.shape
     far = p[P_FAR]
     radius = p[P_RADIUS]
     reach = p[P_LENGTH] - 1e-9
-    z = np.empty(n)
+    top, cos_limit = p[P_RANGE], p[P_COS_LIMIT]
+    in_range, incidence, sonar_on = f[F_RANGE], f[F_INCIDENCE], f[F_SONAR]
     for s in range(n):
         best = np.inf
         for i in range(n_sub):
             d = rays[s, i]
             e = d <= reach
-            if e and f[F_RANGE]:
-                e = (d - radius) < p[P_RANGE]
-            if e and f[F_INCIDENCE]:
-                e = ray_cos[s, i] >= p[P_COS_LIMIT]
+            if e and in_range:
+                e = (d - radius) < top
+            if e and incidence:
+                e = ray_cos[s, i] >= cos_limit
             echo[s, i] = e
             if e and d < best:
                 best = d
-        z[s] = far if best == np.inf else best - radius
+        if sonar_on:
+            raw[s] = far if best == np.inf else best - radius
         crossed[s] = False
-    if not f[F_SONAR]:
+    if not sonar_on:
         return
     if f[F_CROSSTALK]:
         chance = p[P_CROSSTALK]
-        before = z.copy()
+        before = raw[:n].copy()
         for s in range(n):
-            u = draws[4 * s + 3]
+            u = draws[base + 4 * s + 3]
             if u < chance:
                 nb = neighbours[s, 0] if u < chance * 0.5 else neighbours[s, 1]
-                if before[nb] < z[s]:
-                    z[s] = before[nb]
+                if before[nb] < raw[s]:
+                    raw[s] = before[nb]
                     crossed[s] = True
+    beam, min_range = f[F_BEAM], p[P_MIN_RANGE]
     for s in range(n):
-        v = z[s]
-        if f[F_BEAM]:
-            v = _beam(v, draws[4 * s], draws[4 * s + 1], draws[4 * s + 2], p)
-        if p[P_MIN_RANGE] > 0.0 and v < p[P_MIN_RANGE]:
-            v = p[P_MIN_RANGE]
+        v = raw[s]
+        if beam:
+            k = base + 4 * s
+            v = _beam(v, draws[k], draws[k + 1], draws[k + 2], p)
+        if min_range > 0.0 and v < min_range:
+            v = min_range
         raw[s] = v
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _cameras(
     raw: np.ndarray,
     n: int,
     decoy: np.ndarray,
     draws: np.ndarray,
+    base: int,
     p: np.ndarray,
     f: np.ndarray,
     missed: np.ndarray,
@@ -154,7 +177,7 @@ def _cameras(
         misread[c] = False
         if not f[F_CAMERA]:
             continue
-        k = 4 * n + 3 * c
+        k = base + 4 * n + 3 * c
         goal = raw[n + c]
         if f[F_MISREAD] and decoy[c] < far and draws[k] < p[P_MISREAD]:
             goal = decoy[c]
@@ -195,11 +218,11 @@ def apply_realism(
     is on, the camera entries when a camera model is on (see the reference).
     """
     n = rays.shape[0]
-    _sonar(raw, rays, ray_cos, draws, params, flags, neighbours, echo, crossed)
-    _cameras(raw, n, decoy, draws, params, flags, missed, misread)
+    _sonar(raw, rays, ray_cos, draws, 0, params, flags, neighbours, echo, crossed)
+    _cameras(raw, n, decoy, draws, 0, params, flags, missed, misread)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def sense_realism(x: float, y: float, h: float, geometry: tuple, goal: np.ndarray,
                   plates: np.ndarray, buffers: tuple, noise: np.ndarray, u: np.ndarray,
                   noise_from_u: bool, realism: tuple, encoding: tuple, out: np.ndarray,
@@ -208,28 +231,30 @@ def sense_realism(x: float, y: float, h: float, geometry: tuple, goal: np.ndarra
 
     :func:`raycast.sense_one` (without other plates), then, per camera whose misread
     draw ``u[4 n + 3 c] < misread``, the nearest of ``plates`` in its arc and in sight
-    (``decoy``; far for the others), :func:`apply_realism` with the uniforms ``u``, and
-    :func:`readout.readout` with the noise draws ``noise``. With ``noise_from_u`` (the
-    uniform noise model) ``u`` holds both, from one generator call: first the readings'
-    uniforms, turned into ``noise`` as ``rng.uniform(-1, 1)`` turns them (``-1 + 2 u``),
-    then the realism uniforms."""
+    (``decoy``; far for the others), :func:`apply_realism`'s models with the uniforms
+    ``u``, and :func:`readout.readout` with the noise draws ``noise``. With
+    ``noise_from_u`` (the uniform noise model) ``u`` holds both, from one generator call
+    (or as many scalar draws: the same values): first the readings' uniforms, turned into
+    ``noise`` as ``rng.uniform(-1, 1)`` turns them (``-1 + 2 u``), then the realism
+    uniforms."""
     params, camera_dirs, walls = geometry[1], geometry[2], geometry[4]
     raw, rays, eow_k, _, ray_cos, decoy = buffers
     rparams, rflags, neighbours, echo, crossed, missed, misread = realism
     n_sonar = encoding[1]
     m = raw.shape[0]
+    base = 0  # where the realism uniforms start in u
     if noise_from_u:
         for i in range(m):
             noise[i] = -1.0 + 2.0 * u[i]
-        u = u[m:]
-    no_plates = plates[:0]
-    sense_one(x, y, h, geometry, goal, no_plates, buffers)
+        base = m
+    _sense_one(x, y, h, geometry, goal, plates[:0], buffers)
     far = params[2]
+    misread_on, misread_chance = rflags[F_MISREAD], rparams[P_MISREAD]
     for c in range(camera_dirs.shape[0]):
         decoy[c] = far
-        if rflags[F_MISREAD] and u[4 * n_sonar + 3 * c] < rparams[P_MISREAD]:
+        if misread_on and u[base + 4 * n_sonar + 3 * c] < misread_chance:
             direction = h + camera_dirs[c]
             decoy[c] = camera_reading(x, y, direction, plates, params[3], params[1], far, walls)[0]
-    apply_realism(raw, rays, ray_cos, decoy, u, rparams, rflags, neighbours, echo, crossed,
-                  missed, misread)  # fmt: skip
-    return readout(raw, noise, encoding, out, eow_k, codes)
+    _sonar(raw, rays, ray_cos, u, base, rparams, rflags, neighbours, echo, crossed)
+    _cameras(raw, n_sonar, decoy, u, base, rparams, rflags, missed, misread)
+    return _readout(raw, noise, encoding, out, eow_k, codes)

@@ -257,7 +257,7 @@ def test_many_robots_refuse_other_algorithms(tmp_path, capsys) -> None:
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [
         "koolio-pm: error: --robots 2: learner.algorithm: qlambda learns with one robot only: "
-        "the compiled many-robot loop (qkernel) has one-step Q only (use --robots 1)"
+        "the compiled many-robot loop (fleet_kernel) has one-step Q only (use --robots 1)"
     ]
     assert not q.exists()
 

@@ -51,6 +51,17 @@ PAPER_BEARING = {
 }
 BEARING_45 = {**PAPER_BEARING, "actions": {"rotate_action_arc_deg": 45.0}}
 
+#: koolio-real with the sensor models it leaves off or rare made frequent: crosstalk,
+#: misread plates, a strong beam model. The models are compiled inline into the episode:
+#: this holds that copy to the one the Python loop calls (``test_realism.py`` holds that
+#: one to the reference).
+EVERY_SENSOR_MODEL = {
+    "realism": {
+        "sonar": {"crosstalk": 0.3, "z_hit": 0.7, "z_short": 0.1, "z_max": 0.1, "z_rand": 0.1},
+        "camera": {"misread": 0.4, "detect_far": 0.3},
+    }
+}
+
 
 @pytest.mark.parametrize(
     ("arena", "world", "overrides"),
@@ -71,6 +82,7 @@ BEARING_45 = {**PAPER_BEARING, "actions": {"rotate_action_arc_deg": 45.0}}
         ("hallway", None, {**PAPER_MEMORY, **QLAMBDA}),
         ("hallway", None, PAPER_BEARING),
         ("hallway", "koolio-real", BEARING_45),
+        ("hallway", "koolio-real", EVERY_SENSOR_MODEL),
     ],
 )
 def test_compiled_episodes_match_the_python_loop(arena, world, overrides):

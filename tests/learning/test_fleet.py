@@ -155,7 +155,7 @@ def test_backend_pymunk_senses_the_same_with_many_robots(tmp_path) -> None:
     assert tables[0] == tables[1]
 
 
-# -- the compiled loop (qkernel) against the Python code it replaces ------------------------
+# -- the compiled loop (fleet_kernel) against the Python code it replaces ------------------------
 
 
 def test_in_zone_matches_end_zones_contains() -> None:
