@@ -17,6 +17,9 @@ Sections (each printed as a table row, all written to ``--out`` as JSON):
   compiled episode), saving the table (the file written and fsynced, the replaced one
   kept as the backup) and the log at every episode end, then with ``save_every`` 100
   (``--save-every 100``);
+* **IR-SIM, same run**: IR-SIM (``ir-sim``, the ``compare`` extra) stepping the same
+  hallway with an 88-beam lidar (``tools/irsim_compare.py``, collision mode ``stop``), and
+  the end-to-end row's ratio to it; skipped with a note when ir-sim is not installed;
 * **N robots**: :func:`multi.train_many` with ``--robots`` robots, robot-steps per second;
 * **motion**: the cost of one 12-inch move from the same seeded random free poses of the
   hallway (near a wall: within 12 in of one): the pymunk world's (``World.move``), the
@@ -204,6 +207,24 @@ def end_to_end(episodes: int, folder: Path, save_every: int = 1) -> dict:
         )
     out = rates(res.steps, t)
     out.update(episodes=episodes, save_every=save_every)
+    return out
+
+
+def irsim_row(steps: int, e2e: dict, folder: Path) -> dict | None:
+    """IR-SIM stepping the hallway (``tools/irsim_compare.py``, collision ``stop``) and
+    the ratio of ``e2e``'s CPU rate to it; None, with a printed note, without ir-sim."""
+    if str(ROOT / "tools") not in sys.path:
+        sys.path.insert(0, str(ROOT / "tools"))
+    import irsim_compare
+
+    missing = irsim_compare.irsim_missing()
+    if missing:
+        print(f"  IR-SIM row skipped: {missing}")
+        return None
+    path = folder / "hallway_irsim.yaml"
+    path.write_text(irsim_compare.world_yaml(irsim_compare.hallway_world("stop")))
+    out = irsim_compare.drive_irsim(path, steps)
+    out["ratio_train_to_irsim_cpu"] = round(e2e["per_cpu_s"] / max(1, out["per_cpu_s"]), 1)
     return out
 
 
@@ -607,6 +628,11 @@ def main(argv: list[str] | None = None) -> int:
         print(table_line("train end to end (saves) steps/s", e2e))
         e2e100 = end_to_end(200 if q else 1_200, folder, save_every=100)
         print(table_line("train, --save-every 100 steps/s", e2e100))
+        irs = irsim_row(2_000 if q else 10_000, e2e, folder)
+        if irs is not None:
+            report["irsim"] = irs
+            ratio = irs["ratio_train_to_irsim_cpu"]
+            print(table_line("IR-SIM, same hallway steps/s", irs, f"train end to end x{ratio}"))
         multi = many(args.robots, 300 if q else 3000, folder)
         print(table_line(f"{args.robots} robots robot-steps/s", multi))
         report.update(
