@@ -88,6 +88,7 @@ from pathlib import Path
 from typing import Any
 
 from ..store.errors import ConfigError, KoolioError, located, shown
+from ..store.interrupts import terminate_as_interrupt
 
 SPEC_KEYS = (
     "name",
@@ -773,11 +774,12 @@ def _run_locked(
         )
 
     try:
-        if todo:
-            if ray_address is not None:
-                _run_ray(todo, ray_address, workers, finish)
-            else:
-                _run_local(todo, workers, finish)
+        with terminate_as_interrupt():  # SIGTERM stops a sweep as Ctrl-C does
+            if todo:
+                if ray_address is not None:
+                    _run_ray(todo, ray_address, workers, finish)
+                else:
+                    _run_local(todo, workers, finish)
     except KeyboardInterrupt:
         interrupted = True
     results.save(order)
@@ -958,8 +960,12 @@ def _worker(conn: Any, target: Callable[[dict[str, Any]], Any]) -> None:
             message = ("error", exc)
         try:
             conn.send(message)
+        except OSError:  # the sweep is gone (killed): nobody to tell
+            return
         except Exception:  # the exception does not pickle: send its text
-            conn.send(("error", RuntimeError(f"{type(message[1]).__name__}: {message[1]}")))
+            text = RuntimeError(f"{type(message[1]).__name__}: {message[1]}")
+            with contextlib.suppress(OSError):
+                conn.send(("error", text))
 
 
 def _run_ray(

@@ -44,6 +44,27 @@ def command_line() -> None:
         signal.signal(signal.SIGINT, raise_once)
 
 
+@contextlib.contextmanager
+def terminate_as_interrupt() -> Iterator[None]:
+    """While active, SIGTERM raises ``KeyboardInterrupt`` as a first Ctrl-C does (main
+    thread only; elsewhere nothing changes). For a loop whose Ctrl-C path already stops
+    cleanly (a sweep: its finished runs saved, its workers stopped)."""
+    main = threading.current_thread() is threading.main_thread()
+    ours = main and signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
+    if ours:
+        signal.signal(signal.SIGTERM, _terminate)
+    try:
+        yield
+    finally:
+        if ours:  # ours, or ignored by ours once taken
+            signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def _terminate(signum: int, frame: Any) -> None:
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)  # one stop at a time, as raise_once
+    raise KeyboardInterrupt
+
+
 def _replaceable(handler: Any) -> bool:
     """Python's own SIGINT handler, or :func:`raise_once` (a guard may stand in for it)."""
     return handler is signal.default_int_handler or handler is raise_once

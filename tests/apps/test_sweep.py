@@ -206,3 +206,47 @@ def test_cli_dry_run_and_missing_ray(spec_file, tmp_path, capsys, monkeypatch):
     assert err == (
         "koolio-pm: error: --ray: Ray is not installed (pip install 'koolio-pymunk[ray]')\n"
     )
+
+
+LONG_SPEC = """
+name: long
+episodes: 1000
+seeds: [0, 1, 2, 3]
+base: {episode: {max_steps: 200}, learner: {algorithm: dyna}}
+"""
+
+
+@pytest.mark.parametrize("sig", ["SIGTERM", "SIGKILL"])
+def test_a_stopped_sweep_ends_without_tracebacks(tmp_path, sig):
+    """SIGTERM stops a sweep as Ctrl-C does (finished runs kept, workers stopped, exit
+    130, one line); after a SIGKILL of the sweep its workers end quietly (nobody to
+    tell), without a traceback."""
+    import signal
+    import subprocess
+    import time
+
+    spec = tmp_path / "long.yaml"
+    spec.write_text(LONG_SPEC)
+    out = tmp_path / "out"
+    cmd = [sys.executable, "-m", "koolio_pymunk", "sweep", str(spec), "--workers", "2",
+           "--out", str(out), "--no-plot"]  # fmt: skip
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)  # fmt: skip
+    deadline = time.monotonic() + 60
+    while not (out / "spec.yaml").exists() and time.monotonic() < deadline:
+        time.sleep(0.1)
+    time.sleep(2.0)  # the workers are inside their first runs
+    proc.send_signal(getattr(signal, sig))
+    stdout, err = proc.communicate(timeout=120)
+    if sig == "SIGTERM":
+        assert proc.returncode == 130, err
+        assert "interrupted: finished runs are saved" in stdout + err
+    else:  # the workers, orphaned, finish their run and find the pipe closed
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline:
+            ps = subprocess.run(["pgrep", "-s", str(proc.pid)], capture_output=True, text=True)
+            if not ps.stdout.strip():
+                break
+            time.sleep(0.5)
+        assert not ps.stdout.strip(), "the workers did not end"
+    assert "Traceback" not in err

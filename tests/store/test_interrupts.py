@@ -133,3 +133,17 @@ def test_ctrl_c_twice_in_a_real_process(tmp_path, command, gaps):
     assert p.returncode == 130, err
     assert "Traceback" not in err and len(err.strip().splitlines()) <= 1, err
     _in_step(tmp_path)
+
+
+def test_terminate_as_interrupt_raises_keyboard_interrupt_and_restores() -> None:
+    import os
+    import signal
+
+    from koolio_pymunk.store.interrupts import terminate_as_interrupt
+
+    before = signal.getsignal(signal.SIGTERM)
+    with pytest.raises(KeyboardInterrupt), terminate_as_interrupt():
+        os.kill(os.getpid(), signal.SIGTERM)
+        for _ in range(1000):  # the handler runs between bytecodes
+            pass
+    assert signal.getsignal(signal.SIGTERM) == before
