@@ -29,7 +29,7 @@ from typing import Any
 
 from .. import robot_runtime as rt
 from ..learning.algorithms import algorithm_record
-from ..learning.qtable import MAGIC, MAX_TABLE_BYTES, QTable
+from ..learning.qtable import MAGIC, MAX_TABLE_BYTES, RECORD_KEYS, QTable
 from ..store.config import Config, load_config
 from ..store.errors import FileError, QTableError, located
 from ..store.files import atomic_write, check_path, read_bytes
@@ -149,6 +149,9 @@ def policy_document(
     }
     if isinstance(table.meta.get("arena"), dict):  # where it was learned (kept by the robot)
         doc["arena"] = table.meta["arena"]
+    for key in RECORD_KEYS:  # what for and in which world, when not the arena's default
+        if isinstance(table.meta.get(key), str):
+            doc[key] = table.meta[key]
     doc.update(rt.rows_json(table.rows, lay.action_bits))
     try:
         rt.validate_document(doc, source)
@@ -213,6 +216,9 @@ def table_from_policy(policy: rt.Policy) -> QTable:
     arena = policy.extra.get("arena")
     if isinstance(arena, dict) and all(isinstance(arena.get(k), str) for k in ("name", "sha256")):
         meta["arena"] = {"name": arena["name"], "sha256": arena["sha256"]}
+    for key in RECORD_KEYS:
+        if isinstance(policy.extra.get(key), str):
+            meta[key] = policy.extra[key]
     if policy.algorithm != "q":  # the robot's Dyna-Q model stays with the robot
         params = {k: policy.learner[k] for k in rt.ALGORITHMS[policy.algorithm]}
         meta["algorithm"] = {"name": policy.algorithm} | params

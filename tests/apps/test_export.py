@@ -128,6 +128,24 @@ def test_qtable_policy_qtable_round_trip_is_byte_exact(trained, tmp_path):
     assert load_any_table(pol).rows == load_qtable(path).rows
 
 
+def test_a_policy_carries_the_tables_goal_and_world(tmp_path):
+    """A table trained for every door in koolio-real: its policy says so (``goal``,
+    ``world``), the robot runtime keeps both, and the table made back from the policy
+    is the table's bytes (so `eval` and `--init-qtable` see what it was trained for)."""
+    env = KoolioEnv(goal="random", world="koolio-real", max_steps=60)
+    path, pol, back = tmp_path / "t.qtable", tmp_path / "p.json", tmp_path / "back.qtable"
+    train(env, QTableStore(path), episodes=2, seed=0, report=None)
+    meta = load_qtable(path).meta
+    assert (meta["goal"], meta["world"]) == ("random", "koolio-real")  # the premise
+    assert cli.main(["export", "--qtable", str(path), "--out", str(pol)]) == 0
+    doc = json.loads(pol.read_text())
+    assert (doc["goal"], doc["world"]) == ("random", "koolio-real")
+    policy = rt.Policy(doc)
+    assert (policy.extra["goal"], policy.extra["world"]) == ("random", "koolio-real")
+    assert cli.main(["export", "--qtable", str(pol), "--out", str(back)]) == 0
+    assert back.read_bytes() == path.read_bytes()
+
+
 def test_init_qtable_from_policy_continues_learning(trained, tmp_path):
     env, table, _ = trained
     pol = tmp_path / "p.json"
