@@ -77,9 +77,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-import numba
 import numpy as np
-import pymunk.batch
 
 from ..sensing.ray_kernel import new_trig
 from ..sensing.sensor_arrays import GEOMETRY, bundle
@@ -126,54 +124,6 @@ from .training import Progress, RunFiles, TrainResult
 #: Robot-steps per compiled call at most (Python looks for a Ctrl-C and reports between
 #: calls): ``CHUNK // N`` ticks.
 CHUNK = 4096
-
-
-class PoseReader:
-    """Every robot's position in one pymunk batch call (``pymunk.batch``).
-
-    Chipmunk lists bodies in its own order (sleeping robots move to the end), so each
-    call reads the body ids too and puts the rows back in robot order; each robot's
-    arena-copy offset is then removed.
-    """
-
-    def __init__(self, world: World) -> None:
-        self.world = world
-        self.n = world.n_robots
-        ids = np.array([b.id for b in world.bodies], dtype=np.intp)
-        self.order = np.argsort(ids)
-        self.sorted_ids = ids[self.order]
-        self.offsets = np.asarray(world.offsets, dtype=np.float64)
-        self.buffer = pymunk.batch.Buffer()
-        self.fields = pymunk.batch.BodyFields.BODY_ID | pymunk.batch.BodyFields.POSITION
-
-    def xy(self) -> np.ndarray:
-        """``(N, 2)`` positions in robot order, arena coordinates (as ``World.pose``)."""
-        self.buffer.clear()
-        pymunk.batch.get_space_bodies(self.world.space, self.fields, self.buffer)
-        ids = np.frombuffer(self.buffer.int_buf(), dtype=np.intp)
-        pos = np.frombuffer(self.buffer.float_buf())
-        out = np.empty((self.n, 2))
-        _robot_order(ids, pos, self.sorted_ids, self.order, self.offsets, out)
-        return out
-
-
-@numba.njit(cache=True)
-def _robot_order(
-    ids: np.ndarray,
-    pos: np.ndarray,
-    sorted_ids: np.ndarray,
-    order: np.ndarray,
-    offsets: np.ndarray,
-    out: np.ndarray,
-) -> None:
-    """Row ``order[k]`` of ``out`` = the position listed with ``sorted_ids[k]``, minus its
-    robot's x offset; bodies that are no robot (the static body) are skipped."""
-    for j in range(ids.shape[0]):
-        k = np.searchsorted(sorted_ids, ids[j])
-        if k < sorted_ids.shape[0] and sorted_ids[k] == ids[j]:
-            r = order[k]
-            out[r, 0] = pos[2 * j] - offsets[r]
-            out[r, 1] = pos[2 * j + 1]
 
 
 class Fleet:

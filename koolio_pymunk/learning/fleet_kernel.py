@@ -263,7 +263,7 @@ def move_all(
     Reverse are :func:`~koolio_pymunk.world.swept_move.sweep` of robot ``r`` from
     ``copy_xy[r]`` (its body's position in its copy of the arena) against ``walls[r]``
     (its copy's walls, ``wall_array(world, r)``), as the pymunk world computes them;
-    ``xy[r]`` = the position in the arena's coordinates (``PoseReader.xy``).
+    ``xy[r]`` = the position in the arena's coordinates (``World.pose``).
     ``motion`` = ``(move distance, turn arc, radius)``."""
     distance, arc, radius = motion
     for r in range(actions.shape[0]):

@@ -14,7 +14,6 @@ are pymunk's, bit for bit:
 * :func:`cast` and :func:`line_of_sight` are the rays of the sensors;
 * :func:`hypot` is a double-double ``sqrt(dx^2 + dy^2)`` that reproduces CPython's
   correctly rounded ``math.hypot``;
-* :func:`any_near_wall` is the test of Chipmunk's nearest-point query.
 
 Walls are culled by bounding box (:func:`walls_in_box`): a wall whose box the ray's box
 does not meet cannot be hit, so the result does not change. A ray that *starts* on a
@@ -89,28 +88,6 @@ def wall_array(world: World, copy: int = 0) -> np.ndarray:
     """
     rows = [wall_row(s) for s in world.copies[copy]]
     return np.ascontiguousarray(np.array(rows, dtype=np.float64).reshape(-1, WALL_COLUMNS))
-
-
-@numba.njit(cache=True)
-def any_near_wall(xy: np.ndarray, robots: np.ndarray, reach: float, walls: np.ndarray) -> bool:
-    """Whether a wall is nearer than ``reach`` to any of the points ``xy[robots]``.
-
-    The test of Chipmunk's nearest-point query for a segment (``cpClosetPointOnSegment``,
-    distance below the query's maximum), in arena coordinates: what
-    ``space.point_query_nearest`` answers for each point (up to rounding at exactly
-    ``reach``), without a Python call per point. (The fleet hands it to ``World.act`` as
-    ``near_wall``, which the swept moves no longer need.)
-    """
-    for r in robots:
-        px, py = xy[r, 0], xy[r, 1]
-        for k in range(walls.shape[0]):
-            ax, ay, bx, by = walls[k, 0], walls[k, 1], walls[k, 2], walls[k, 3]
-            dx, dy = ax - bx, ay - by
-            t = min(max((dx * (px - bx) + dy * (py - by)) / (dx * dx + dy * dy), 0.0), 1.0)
-            cx, cy = px - (bx + dx * t), py - (by + dy * t)
-            if math.sqrt(cx * cx + cy * cy) < reach:
-                return True
-    return False
 
 
 @numba.njit(cache=True)
