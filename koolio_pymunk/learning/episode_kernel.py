@@ -56,9 +56,9 @@ from collections.abc import Callable
 import numba
 import numpy as np
 
-from ..sensing.encoding_kernel import readout
+from ..sensing.encoding_kernel import readout_inline
 from ..sensing.memory import FULL_TURN_MDEG, QUARTER_MDEG, ROTATE_LEFT, ROTATE_RIGHT
-from ..sensing.ray_kernel import sense_one
+from ..sensing.ray_kernel import sense_one_inline
 from ..sensing.realism_kernel import sense_realism
 from ..task.env import WRONG_DOOR, KoolioEnv
 from ..world.segment_query import wall_array
@@ -120,9 +120,9 @@ def sense_reading(x: float, y: float, h: float, rng, sense: tuple) -> tuple[int,
                 u[i] = rng.random()
         return sense_realism(x, y, h, geometry, goal, plates, buffers, noise, u, not gaussian,
                              realism, encoding, out, codes)  # fmt: skip
-    sense_one(x, y, h, geometry, goal, plates, buffers)
+    sense_one_inline(x, y, h, geometry, goal, plates, buffers)
     draws = rng.standard_normal(n_raw) if gaussian else rng.uniform(-1.0, 1.0, n_raw)
-    return readout(buffers[0], draws, encoding, out, buffers[2], codes)
+    return readout_inline(buffers[0], draws, encoding, out, buffers[2], codes)
 
 
 @numba.njit(cache=True)
