@@ -327,7 +327,7 @@ def step_costs(poses: int, step_us: float, repeats: int = 3, world: str | None =
     import numpy as np
 
     from koolio_pymunk.learning.algorithms import make_learner
-    from koolio_pymunk.learning.episode_kernel import CompiledEpisode, _act, _move, _sense
+    from koolio_pymunk.learning.episode_kernel import CompiledEpisode, _act, _move, sense_reading
     from koolio_pymunk.learning.episodes import Episodes
     from koolio_pymunk.learning.fleet_kernel import SharedTable, update
     from koolio_pymunk.learning.qtable import QTable
@@ -335,7 +335,7 @@ def step_costs(poses: int, step_us: float, repeats: int = 3, world: str | None =
     @numba.njit
     def sensing(pts, hs, rng, sense, keys):
         for i in range(pts.shape[0]):
-            keys[i] = _sense(pts[i, 0], pts[i, 1], hs[i], rng, sense)[0]
+            keys[i] = sense_reading(pts[i, 0], pts[i, 1], hs[i], rng, sense)[0]
 
     @numba.njit
     def moving(pts, hs, actions, rng, world):

@@ -56,9 +56,9 @@ from collections.abc import Callable
 import numba
 import numpy as np
 
-from ..sensing.encoding_kernel import readout
+from ..sensing.encoding_kernel import readout_inline
 from ..sensing.memory import FULL_TURN_MDEG, QUARTER_MDEG, ROTATE_LEFT, ROTATE_RIGHT
-from ..sensing.ray_kernel import sense_one
+from ..sensing.ray_kernel import sense_one_inline
 from ..sensing.realism_kernel import sense_realism
 from ..task.env import WRONG_DOOR, KoolioEnv
 from ..world.segment_query import wall_array
@@ -104,9 +104,10 @@ def why_not(env: KoolioEnv, agent: object, learn: bool = True) -> str | None:
 @numba.njit(cache=True)
 def sense_reading(x: float, y: float, h: float, rng, sense: tuple) -> tuple[int, bool, bool]:
     """``KernelInputs.sense_readout``: the reading's draws from ``rng``, the kernels
-    (``sense``: :meth:`CompiledEpisode.sense_group`; the fleet builds one per robot). With
-    realism models on, the draws go one by one into the buffer ``u`` (the generator's
-    stream is that of its calls with a size: each value is the next scalar draw)."""
+    (``sense``: :meth:`CompiledEpisode.sense_group`; the fleet builds one per robot). The
+    draws go one by one into the buffers ``noise`` and, with realism models on, ``u`` (the
+    generator's stream is that of its calls with a size: each value is the next scalar
+    draw), so the draws allocate no array."""
     geometry, goal, plates, buffers, encoding, realism, noise, out, codes, flags, u = sense
     real_on, gaussian, n_raw, n_draws = flags[0] == 1, flags[1] == 1, flags[2], flags[3]
     if real_on:
@@ -120,9 +121,14 @@ def sense_reading(x: float, y: float, h: float, rng, sense: tuple) -> tuple[int,
                 u[i] = rng.random()
         return sense_realism(x, y, h, geometry, goal, plates, buffers, noise, u, not gaussian,
                              realism, encoding, out, codes)  # fmt: skip
-    sense_one(x, y, h, geometry, goal, plates, buffers)
-    draws = rng.standard_normal(n_raw) if gaussian else rng.uniform(-1.0, 1.0, n_raw)
-    return readout(buffers[0], draws, encoding, out, buffers[2], codes)
+    sense_one_inline(x, y, h, geometry, goal, plates, buffers)
+    if gaussian:
+        for i in range(n_raw):
+            noise[i] = rng.standard_normal()
+    else:
+        for i in range(n_raw):
+            noise[i] = rng.uniform(-1.0, 1.0)
+    return readout_inline(buffers[0], noise, encoding, out, buffers[2], codes)
 
 
 @numba.njit(cache=True)

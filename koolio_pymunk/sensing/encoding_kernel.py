@@ -25,8 +25,10 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from .inline_twins import inline_twin
 
-@numba.njit(cache=True)
+
+@numba.njit(cache=True, inline="always")
 def _numpy_sum(values: np.ndarray, n: int) -> float:
     """``np.add.reduce`` of ``values[:n]`` (contiguous float64, n <= 128), bit for bit."""
     if n < 8:
@@ -47,7 +49,7 @@ def _numpy_sum(values: np.ndarray, n: int) -> float:
     return res
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _code(value: float, thresholds: np.ndarray) -> int:
     """``np.searchsorted(thresholds, value, side="right")`` for increasing thresholds."""
     k = 0
@@ -130,6 +132,12 @@ def readout(raw: np.ndarray, draws: np.ndarray, encoding: tuple, out: np.ndarray
     return key, bump, out[n_sonar] < camera_thresholds[0]
 
 
+#: :func:`readout` compiled into its callers (:func:`~.inline_twins.inline_twin`): for
+#: compiled callers on a hot path (:func:`readout_batch`, the compiled episode's reading,
+#: the realism kernel).
+readout_inline = inline_twin(readout)
+
+
 @numba.njit(cache=True)
 def readout_batch(
     raw: np.ndarray, draws: np.ndarray, encoding: tuple, out: np.ndarray, eow_k: np.ndarray,
@@ -138,7 +146,7 @@ def readout_batch(
     """:func:`readout` of row ``r`` of ``raw``/``draws`` for every robot ``r``: writes
     ``keys[r]``, ``flags[r, 0]`` (Bump) and ``flags[r, 1]`` (goal close)."""
     for r in range(raw.shape[0]):
-        key, bump, close = readout(raw[r], draws[r], encoding, out[r], eow_k[r], codes[r])
+        key, bump, close = readout_inline(raw[r], draws[r], encoding, out[r], eow_k[r], codes[r])
         keys[r] = key
         flags[r, 0] = bump
         flags[r, 1] = close

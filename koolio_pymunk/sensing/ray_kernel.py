@@ -25,6 +25,7 @@ import numba
 import numpy as np
 
 from ..world.segment_query import first_hit, hypot, line_of_sight, near_walls, walls_in_box
+from .inline_twins import inline_twin
 
 TWO_PI = 2.0 * math.pi
 
@@ -175,7 +176,7 @@ def sense_one(x: float, y: float, h: float, geometry: tuple, goal: np.ndarray, p
     raw[n_sonar + 2 * n_cam] = (h / TWO_PI) * 256.0
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _ray_directions(h: float, ray_offsets: np.ndarray, trig: np.ndarray) -> np.ndarray:
     """The row of ``trig`` holding ``cos`` and ``sin`` of every ray at heading ``h``
     (``cos(h + offset)``, as the reference computes them), filled if not cached."""
@@ -197,7 +198,7 @@ def _ray_directions(h: float, ray_offsets: np.ndarray, trig: np.ndarray) -> np.n
     return row
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _sense_cones(
     x: float,
     y: float,
@@ -220,7 +221,7 @@ def _sense_cones(
         raw[s] = far if nearest > length - 1e-9 else nearest - radius
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _sense_sub_arcs(
     x: float,
     y: float,
@@ -270,6 +271,15 @@ def _sense_sub_arcs(
         raw[s] = far if nearest > length - 1e-9 else nearest - radius
 
 
+#: :func:`camera_reading` and :func:`sense_one` with every call that passes arrays compiled
+#: into them (:func:`~.inline_twins.inline_twin`): for compiled callers on a hot path (this
+#: module's :func:`sense_batch`, the compiled episode's reading, the realism kernel).
+camera_reading_inline = inline_twin(camera_reading, line_of_sight=inline_twin(line_of_sight))
+sense_one_inline = inline_twin(
+    sense_one, near_walls=inline_twin(near_walls), camera_reading=camera_reading_inline
+)
+
+
 @numba.njit(cache=True)
 def sense_batch(
     xs: np.ndarray, ys: np.ndarray, hs: np.ndarray, geometry: tuple, goals: np.ndarray,
@@ -283,7 +293,7 @@ def sense_batch(
     no_decoy = np.empty(0)
     for r in range(xs.shape[0]):
         buffers = (raw[r], rays[r], eow_k[r], trig[r], no_cos, no_decoy)
-        sense_one(xs[r], ys[r], hs[r], geometry, goals[r], no_plates, buffers)
+        sense_one_inline(xs[r], ys[r], hs[r], geometry, goals[r], no_plates, buffers)
 
 
 # -- engines -------------------------------------------------------------------------------

@@ -16,11 +16,12 @@ The parameter layout (``params``, ``flags``) is
 decrements each array's reference count, an atomic operation: with the models in
 functions of their own, a third of a realistic reading's perf samples were in
 ``NRT_incref``/``NRT_decref`` (``docs/speed.md``). So the models' helpers are compiled inline
-into their caller (``inline="always"``), and :func:`sense_realism` holds inline twins of
-:func:`~.ray_kernel.sense_one` and :func:`~.encoding_kernel.readout` (the same Python
-functions compiled a second time); the draws are read at an offset (``base``) instead
-of through a view. The arithmetic is the same operations in the same order (no
-fastmath), so the readings are the same bits.
+into their caller (``inline="always"``), and :func:`sense_realism` calls the inline twins
+of :func:`~.ray_kernel.sense_one`, :func:`~.ray_kernel.camera_reading` and
+:func:`~.encoding_kernel.readout` (the same Python functions compiled a second time, with
+the functions they call that take arrays: :mod:`~.inline_twins`); the draws are read at an
+offset (``base``) instead of through a view. The arithmetic is the same operations in the
+same order (no fastmath), so the readings are the same bits.
 """
 
 from __future__ import annotations
@@ -30,8 +31,8 @@ import math
 import numba
 import numpy as np
 
-from .encoding_kernel import readout
-from .ray_kernel import camera_reading, sense_one
+from .encoding_kernel import readout_inline
+from .ray_kernel import camera_reading_inline, sense_one_inline
 from .realism import (
     F_BEAM,
     F_CAMERA,
@@ -58,11 +59,6 @@ from .realism import (
     P_Z_MAX,
     P_Z_SHORT,
 )
-
-#: :func:`~.ray_kernel.sense_one` and :func:`~.encoding_kernel.readout` compiled into
-#: :func:`sense_realism` itself (the same Python functions, inlined; never called alone).
-_sense_one = numba.njit(cache=True, inline="always")(sense_one.py_func)
-_readout = numba.njit(cache=True, inline="always")(readout.py_func)
 
 
 @numba.njit(cache=True, inline="always")
@@ -247,14 +243,15 @@ def sense_realism(x: float, y: float, h: float, geometry: tuple, goal: np.ndarra
         for i in range(m):
             noise[i] = -1.0 + 2.0 * u[i]
         base = m
-    _sense_one(x, y, h, geometry, goal, plates[:0], buffers)
+    sense_one_inline(x, y, h, geometry, goal, plates[:0], buffers)
     far = params[2]
     misread_on, misread_chance = rflags[F_MISREAD], rparams[P_MISREAD]
     for c in range(camera_dirs.shape[0]):
         decoy[c] = far
         if misread_on and u[base + 4 * n_sonar + 3 * c] < misread_chance:
             direction = h + camera_dirs[c]
-            decoy[c] = camera_reading(x, y, direction, plates, params[3], params[1], far, walls)[0]
+            decoy[c] = camera_reading_inline(x, y, direction, plates, params[3], params[1], far,
+                                             walls)[0]  # fmt: skip
     _sonar(raw, rays, ray_cos, u, base, rparams, rflags, neighbours, echo, crossed)
     _cameras(raw, n_sonar, decoy, u, base, rparams, rflags, missed, misread)
-    return _readout(raw, noise, encoding, out, eow_k, codes)
+    return readout_inline(raw, noise, encoding, out, eow_k, codes)
