@@ -57,7 +57,7 @@ import numba
 import numpy as np
 
 from ..sensing.encoding_kernel import readout_inline
-from ..sensing.memory import FULL_TURN_MDEG, QUARTER_MDEG, ROTATE_LEFT, ROTATE_RIGHT
+from ..sensing.memory import bearing_code, turned
 from ..sensing.ray_kernel import sense_one_inline
 from ..sensing.realism_kernel import sense_realism
 from ..task.env import WRONG_DOOR, KoolioEnv
@@ -185,16 +185,9 @@ def _sighting(seen: int, forget: int, held: int, age: int, moved: bool):
     return held, age
 
 
-@numba.njit(cache=True)
-def _bearing_code(bearing: int) -> int:
-    """``memory.bearing_code``."""
-    if -QUARTER_MDEG < bearing < QUARTER_MDEG:
-        return 1
-    if QUARTER_MDEG <= bearing < 3 * QUARTER_MDEG:
-        return 2
-    if -3 * QUARTER_MDEG < bearing <= -QUARTER_MDEG:
-        return 4
-    return 3
+#: ``memory.bearing_code`` and ``memory.turned``, compiled from the same Python code.
+_bearing_code = numba.njit(cache=True)(bearing_code)
+_turned = numba.njit(cache=True)(turned)
 
 
 @numba.njit(cache=True)
@@ -215,12 +208,7 @@ def _remember(key: int, action: int, out: np.ndarray, memory: tuple, mem: np.nda
         if seen:
             mem[7] = memory[6][seen - 1]
         elif moved and mem[3]:
-            b = mem[7]
-            if action == ROTATE_LEFT:
-                b -= memory[7]
-            elif action == ROTATE_RIGHT:
-                b += memory[7]
-            mem[7] = (b + FULL_TURN_MDEG // 2) % FULL_TURN_MDEG - FULL_TURN_MDEG // 2
+            mem[7] = _turned(mem[7], action, memory[7])
         held, mem[6] = _sighting(seen, forget, mem[3], mem[6], moved)
         mem[3] = _bearing_code(mem[7]) if held else 0
     if moved:
