@@ -55,10 +55,10 @@ def tool_without_irsim(args: list[str], cwd: Path) -> subprocess.CompletedProces
 
 @pytest.fixture()
 def tools(monkeypatch: pytest.MonkeyPatch):
-    """The ``irsim_compare`` and ``bench`` modules, imported from tools/ (ir-sim hidden)."""
+    """The ``irsim_world`` and ``bench`` modules, imported from tools/ (ir-sim hidden)."""
     monkeypatch.syspath_prepend(str(REPO / "tools"))
     monkeypatch.setitem(sys.modules, "irsim", None)  # ``import irsim`` fails
-    return importlib.import_module("irsim_compare"), importlib.import_module("bench")
+    return importlib.import_module("irsim_world"), importlib.import_module("bench")
 
 
 def test_without_irsim_one_line_and_exit_2(tmp_path: Path) -> None:
@@ -98,8 +98,8 @@ def test_the_world_file_is_the_hallway_in_metres(tmp_path: Path) -> None:
 
 
 def test_contact_walls_are_slabs_outside_the_hallway(tools) -> None:
-    irsim_compare, _ = tools
-    world = irsim_compare.hallway_world("contact")
+    irsim_world, _ = tools
+    world = irsim_world.hallway_world("contact")
     arena = load_arena("hallway")
     slabs = [o["shape"] for o in world["obstacle"]]
     assert len(slabs) == len(arena.walls) and {s["name"] for s in slabs} == {"polygon"}
@@ -112,8 +112,8 @@ def test_contact_walls_are_slabs_outside_the_hallway(tools) -> None:
 
 
 def test_the_tool_doctests(tools) -> None:
-    irsim_compare, _ = tools
-    assert doctest.testmod(irsim_compare).failed == 0
+    irsim_world, _ = tools
+    assert doctest.testmod(irsim_world).failed == 0
 
 
 def test_bench_skips_its_irsim_row_with_a_note(tools, tmp_path: Path) -> None:

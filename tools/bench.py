@@ -70,30 +70,13 @@ import tempfile
 import time
 from pathlib import Path
 
+if str(Path(__file__).resolve().parent) not in sys.path:  # the tools' own modules
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from timing import Timer, rates
+
 ROOT = Path(__file__).resolve().parent.parent
 PAPER_DENSE_MIB = 113.9
-
-
-class Timer:
-    """Wall and CPU seconds of a block."""
-
-    def __enter__(self) -> Timer:
-        self.w0, self.c0 = time.perf_counter(), time.process_time()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.wall = time.perf_counter() - self.w0
-        self.cpu = time.process_time() - self.c0
-
-
-def rates(steps: int, t: Timer) -> dict:
-    return {
-        "steps": steps,
-        "wall_s": round(t.wall, 3),
-        "cpu_s": round(t.cpu, 3),
-        "per_wall_s": round(steps / max(t.wall, 1e-9)),
-        "per_cpu_s": round(steps / max(t.cpu, 1e-9)),
-    }
 
 
 def make_env(
@@ -215,15 +198,15 @@ def irsim_row(steps: int, e2e: dict, folder: Path) -> dict | None:
     the ratio of ``e2e``'s CPU rate to it; None, with a printed note, without ir-sim."""
     if str(ROOT / "tools") not in sys.path:
         sys.path.insert(0, str(ROOT / "tools"))
-    import irsim_compare
+    import irsim_world
 
-    missing = irsim_compare.irsim_missing()
+    missing = irsim_world.irsim_missing()
     if missing:
         print(f"  IR-SIM row skipped: {missing}")
         return None
     path = folder / "hallway_irsim.yaml"
-    path.write_text(irsim_compare.world_yaml(irsim_compare.hallway_world("stop")))
-    out = irsim_compare.drive_irsim(path, steps)
+    path.write_text(irsim_world.world_yaml(irsim_world.hallway_world("stop")))
+    out = irsim_world.drive_irsim(path, steps)
     out["ratio_train_to_irsim_cpu"] = round(e2e["per_cpu_s"] / max(1, out["per_cpu_s"]), 1)
     return out
 
