@@ -141,9 +141,14 @@ def test_terminate_as_interrupt_raises_keyboard_interrupt_and_restores() -> None
 
     from koolio_pymunk.store.interrupts import terminate_as_interrupt
 
-    before = signal.getsignal(signal.SIGTERM)
-    with pytest.raises(KeyboardInterrupt), terminate_as_interrupt():
-        os.kill(os.getpid(), signal.SIGTERM)
-        for _ in range(1000):  # the handler runs between bytecodes
-            pass
-    assert signal.getsignal(signal.SIGTERM) == before
+    # The premise: SIGTERM's default action (a library run before, Ray's driver for one,
+    # may have put its own handler there; the guard then leaves it alone).
+    previous = signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    try:
+        with pytest.raises(KeyboardInterrupt), terminate_as_interrupt():
+            os.kill(os.getpid(), signal.SIGTERM)
+            for _ in range(1000):  # the handler runs between bytecodes
+                pass
+        assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
+    finally:
+        signal.signal(signal.SIGTERM, previous)
