@@ -122,6 +122,8 @@ class Memory:
         self.cfg = cfg
         self.n_camera = n_camera
         self.far = far
+        if cfg.goal_bearing and len(camera_deg) != n_camera:
+            raise ValueError(f"goal_bearing needs the {n_camera} cameras' angles (camera_deg)")
         self.camera_mdeg = [millidegrees(d) for d in camera_deg]
         """Each camera's angle, millidegrees."""
         self.turn_mdeg = millidegrees(turn_deg)

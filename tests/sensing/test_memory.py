@@ -76,6 +76,11 @@ def test_bearing_turns_with_the_robot_and_is_forgotten() -> None:
     assert keeps.bearing_mdeg == -180_000 and keeps.codes == (3,)
 
 
+def test_bearing_needs_the_cameras_angles() -> None:
+    with pytest.raises(ValueError, match="camera_deg"):
+        Memory(MemoryConfig(goal_bearing=True), 3, FAR, camera_deg=[0.0, 90.0])
+
+
 def test_bearing_field_and_signature() -> None:
     over = {"sensors": {"memory": {"goal_bearing": True}}, "actions": {"rotate_action_arc_deg": 45}}
     cfg = load_config(overrides=over)
