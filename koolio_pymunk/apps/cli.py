@@ -394,6 +394,10 @@ def cmd_train(args: argparse.Namespace) -> int:
     store = QTableStore(args.qtable, purpose="koolio-pm train")
     # Everything that reading can check comes first: an error is the only line printed,
     # and no file (not even a lock file) is left behind.
+    if args.robots > 1:
+        from ..learning.fleet import check_fleet
+
+        check_fleet(env, args.robots)
     if args.init_qtable:
         start = _check_init_table(args.init_qtable, store, args.log, env)
     else:

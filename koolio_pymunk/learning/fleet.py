@@ -190,6 +190,35 @@ def _generators(n: int):
     return out
 
 
+def check_fleet(env: KoolioEnv, robots: int) -> None:
+    """Refuse, in one line, what the many-robot loop does not run: realism models, a
+    memory in the state, a learner other than one-step Q (``train`` asks before it
+    prints or writes anything)."""
+    cfg = env.config
+    if realism_on(cfg.realism):
+        raise KoolioError(
+            "--robots: the many-robot loop runs the ideal world only (its compiled tick "
+            "has no realism models) and this configuration turns realism on: use --robots 1"
+        )
+    if cfg.sensors.memory.on:
+        raise ConfigError(
+            located(
+                f"--robots {robots}",
+                "sensors.memory",
+                "the many-robot loop has no memory in its state yet (use --robots 1)",
+            )
+        )
+    if cfg.learner.algorithm != "q":
+        raise ConfigError(
+            located(
+                f"--robots {robots}",
+                "learner.algorithm",
+                f"{cfg.learner.algorithm} learns with one robot only: the compiled "
+                "many-robot loop (fleet_kernel) has one-step Q only (use --robots 1)",
+            )
+        )
+
+
 class _Run:
     def __init__(
         self,
@@ -203,29 +232,7 @@ class _Run:
         journal: bool = False,
     ) -> None:
         cfg = env.config
-        if realism_on(cfg.realism):
-            raise KoolioError(
-                "--robots: the many-robot loop runs the ideal world only (its compiled tick "
-                "has no realism models) and this configuration turns realism on: use --robots 1"
-            )
-        mem = cfg.sensors.memory
-        if mem.on:
-            raise ConfigError(
-                located(
-                    f"--robots {robots}",
-                    "sensors.memory",
-                    "the many-robot loop has no memory in its state yet (use --robots 1)",
-                )
-            )
-        if cfg.learner.algorithm != "q":
-            raise ConfigError(
-                located(
-                    f"--robots {robots}",
-                    "learner.algorithm",
-                    f"{cfg.learner.algorithm} learns with one robot only: the compiled "
-                    "many-robot loop (fleet_kernel) has one-step Q only (use --robots 1)",
-                )
-            )
+        check_fleet(env, robots)
         self.env, self.cfg = env, cfg
         self.files = RunFiles.open(env, store, log_path, "koolio-pm train")
         self.table = self.files.table

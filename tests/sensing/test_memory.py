@@ -152,7 +152,10 @@ def test_many_robots_refuse_memory_in_one_line(tmp_path, capsys) -> None:
     cfg.write_text("sensors: {memory: {previous_action: true}}\n")
     args = ["train", "--arena", "room", "--config", str(cfg), "--robots", "2", "--episodes", "2"]
     assert main([*args, "--qtable", str(tmp_path / "t.qtable")]) == 2
-    assert "sensors.memory" in capsys.readouterr().err
+    out, err = capsys.readouterr()
+    assert "sensors.memory" in err and err.count("\n") == 1
+    assert out == ""  # refused before the opening line: the error is the only line
+    assert not list(tmp_path.glob("t.*"))
 
 
 @pytest.mark.parametrize("bearing", [False, True])
