@@ -68,10 +68,10 @@ from .fleet_kernel import (
     EVENTS,
     N_TERMINAL,
     SharedTable,
-    find_row,
     in_zone,
     reward_array,
     row_of,
+    td_target,
     zone_arrays,
 )
 from .fleet_kernel import update as td_update
@@ -245,15 +245,11 @@ def lambda_update(
     cutoff dropped (in order: the Python dict's order). ``traces`` = ``(rows, actions,
     e, meta)``: the traced entries by table row, ``meta[0]`` their count, ``meta[1]`` the
     state the next step is expected to start from (-1: none)."""
-    q, dirty, q_init = table[0], table[2], table[4]
+    q, dirty = table[0], table[2]
     decay, cutoff = lam[1], lam[2]
     t_row, t_act, t_e, meta = traces
     i = row_of(index, table, state)
-    if terminal:
-        target = reward
-    else:
-        j = find_row(index, nxt)
-        target = reward + gamma * (q[j].max() if j >= 0 else q_init)
+    target = td_target(index, table, gamma, reward, nxt, terminal)
     step = alpha * (target - q[i, action])
     n = meta[0]
     k = 0

@@ -146,17 +146,23 @@ def row_of(index, table: tuple, key: int) -> int:
 
 
 @numba.njit(cache=True)
+def td_target(index, table: tuple, gamma: float, reward: float, nxt: int, terminal: bool) -> float:
+    """``qlearning.td_target``: the reward alone after a terminal step, else ``reward +
+    gamma * max`` of ``nxt``'s row (``q_init`` for a state never visited)."""
+    if terminal:
+        return reward
+    j = find_row(index, nxt)
+    return reward + gamma * (table[0][j].max() if j >= 0 else table[4])
+
+
+@numba.njit(cache=True)
 def update(index, table: tuple, alpha: float, gamma: float, state: int, action: int, reward: float,
            nxt: int, terminal: bool) -> None:  # fmt: skip
     """``QLearner.update``: Table 11, no bootstrap from a terminal step (``table``:
     :meth:`SharedTable.args`)."""
-    q, dirty, q_init = table[0], table[2], table[4]
+    q, dirty = table[0], table[2]
     i = row_of(index, table, state)
-    if terminal:
-        target = reward
-    else:
-        j = find_row(index, nxt)
-        target = reward + gamma * (q[j].max() if j >= 0 else q_init)
+    target = td_target(index, table, gamma, reward, nxt, terminal)
     q[i, action] += alpha * (target - q[i, action])
     dirty[i] = True
 
