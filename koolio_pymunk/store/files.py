@@ -152,7 +152,7 @@ def staged_write(
         )
     except OSError as exc:
         raise file_error(path, "write", exc) from None
-    try:
+    with _temporary(tmp, path):
         with os.fdopen(fd, "wb") as fh:
             fh.write(data)
             fh.flush()
@@ -161,6 +161,15 @@ def staged_write(
             written = os.fstat(fh.fileno())
         yield written
         os.replace(tmp, path)
+
+
+@contextlib.contextmanager
+def _temporary(tmp: str | Path, path: Path) -> Iterator[None]:
+    """A block that ends with the temporary file ``tmp`` renamed over ``path``: on any
+    exception ``tmp`` is removed, and an ``OSError`` becomes ``path``'s one-line
+    :class:`FileError`."""
+    try:
+        yield
     except BaseException as exc:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
@@ -215,14 +224,8 @@ def atomic_link(src: str | Path, dst: str | Path) -> bool:
         os.link(src, tmp)
     except OSError:
         return False
-    try:
+    with _temporary(tmp, dst):
         os.replace(tmp, dst)
-    except BaseException as exc:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        if isinstance(exc, OSError):
-            raise file_error(dst, "write", exc) from None
-        raise
     return True
 
 
