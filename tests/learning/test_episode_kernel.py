@@ -63,6 +63,18 @@ EVERY_SENSOR_MODEL = {
 }
 
 
+def stop_after(calls: int):
+    """A ``stop`` callback for ``Episodes.run`` that says stop at its ``calls``-th call
+    (the Python loop asks once a step, the compiled one once per chunk of steps)."""
+    count = [0]
+
+    def stop() -> bool:
+        count[0] += 1
+        return count[0] >= calls
+
+    return stop
+
+
 @pytest.mark.parametrize(
     ("arena", "world", "overrides"),
     [
@@ -179,14 +191,7 @@ def test_qlambda_stopped_between_chunks_leaves_the_traces_of_the_python_steps(
         loop = Episodes(env, agent, seed=4, compiled=compiled)
         for e in range(2):
             loop.begin(e)
-            calls: list[int] = []
-            last = 12 if compiled else 60  # 60 steps either way
-
-            def stop(calls=calls, last=last):
-                calls.append(1)
-                return len(calls) >= last
-
-            res = loop.run(stop)
+            res = loop.run(stop_after(12 if compiled else 60))  # 60 steps either way
         traces = list(agent.traces.items())
         runs[compiled] = (res.row(), env.state_key, table.rows, traces, agent._expect)
     assert len(runs[False][3]) > 1  # the premise: several entries traced
@@ -231,14 +236,7 @@ def test_stop_between_chunks_interrupts_with_the_updates_kept(monkeypatch):
         agent = make_learner(table, env.config.learner, None)
         loop = Episodes(env, agent, seed=2, compiled=compiled)
         loop.begin(0)
-        calls: list[int] = []
-        last = 3 if compiled else 21  # 21 steps either way
-
-        def stop(calls=calls, last=last):
-            calls.append(1)
-            return len(calls) >= last
-
-        res = loop.run(stop)
+        res = loop.run(stop_after(3 if compiled else 21))  # 21 steps either way
         runs[compiled] = (res.row(), env.world.pose(0), env.state_key, table.rows)
     assert runs[True][0][4] == INTERRUPTED and runs[True][0][2] == "21"
     assert runs[True] == runs[False]
