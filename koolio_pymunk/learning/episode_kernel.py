@@ -60,6 +60,7 @@ from ..sensing.encoding_kernel import readout_inline
 from ..sensing.memory import bearing_code, turned
 from ..sensing.ray_kernel import sense_one_inline
 from ..sensing.realism_kernel import sense_realism
+from ..store.kernel_cache import ensure_fresh
 from ..task.env import WRONG_DOOR, KoolioEnv
 from ..world.segment_query import wall_array
 from ..world.swept_move import sweep
@@ -77,6 +78,8 @@ from .fleet_kernel import (
 from .fleet_kernel import update as td_update
 from .qlambda import QLambda
 from .qlearning import QLearner
+
+ensure_fresh()  # numba's cache, in step with every kernel's source (see there)
 
 #: Steps per compiled call at most (Python checks for Ctrl-C between calls).
 CHUNK = 4096

@@ -36,6 +36,7 @@ from numba import types
 from numba.typed import Dict
 
 from ..store.config import RewardConfig
+from ..store.kernel_cache import ensure_fresh
 from ..task.end_zones import EndZones
 from ..task.rules import ACTION_TERMS, TERMINAL_EVENTS, TERMS
 from ..world.geometry import EPS
@@ -43,6 +44,8 @@ from ..world.physics import TWO_PI, Action
 from ..world.segment_query import hypot
 from ..world.swept_move import sweep
 from .qtable import QTable
+
+ensure_fresh()  # numba's cache, in step with every kernel's source (see there)
 
 #: :func:`learn`'s reasons to stop at a robot.
 DONE, RESCUE_DRAW, TERMINAL, AT_CAP = 0, 1, 2, 3

@@ -39,6 +39,7 @@ from numba.typed import List
 
 from ..sensing.encoding_kernel import readout_batch
 from ..sensing.ray_kernel import sense_batch
+from ..store.kernel_cache import ensure_fresh
 from .episode_kernel import TRUNCATED_CODE, rescue_moves, sense_reading
 from .fleet_kernel import (
     AT_CAP,
@@ -50,6 +51,8 @@ from .fleet_kernel import (
     move_all,
     update_logged,
 )
+
+ensure_fresh()  # numba's cache, in step with every kernel's source (see there)
 
 #: :func:`run_ticks`'s reasons to return: ``ctl[C_TICKS]`` reached the call's tick budget
 #: (between two ticks); ``records`` reached ``ctl[C_STOP_AT]``; a start needs a slot

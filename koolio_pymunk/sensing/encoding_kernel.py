@@ -25,7 +25,10 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from ..store.kernel_cache import ensure_fresh
 from .inline_twins import inline_twin
+
+ensure_fresh()  # numba's cache, in step with every kernel's source (see there)
 
 
 @numba.njit(cache=True, inline="always")

@@ -22,6 +22,10 @@ import types
 
 import numba
 
+from ..store.kernel_cache import ensure_fresh
+
+ensure_fresh()  # numba's cache, in step with every kernel's source (see there)
+
 
 def inline_twin(kernel, **callees):
     """An ``inline="always"`` copy of the compiled function ``kernel``: its Python code

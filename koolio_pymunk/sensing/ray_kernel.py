@@ -24,8 +24,11 @@ import math
 import numba
 import numpy as np
 
+from ..store.kernel_cache import ensure_fresh
 from ..world.segment_query import first_hit, hypot, line_of_sight, near_walls, walls_in_box
 from .inline_twins import inline_twin
+
+ensure_fresh()  # numba's cache, in step with every kernel's source (see there)
 
 TWO_PI = 2.0 * math.pi
 

@@ -31,6 +31,7 @@ import math
 import numba
 import numpy as np
 
+from ..store.kernel_cache import ensure_fresh
 from .encoding_kernel import readout_inline
 from .ray_kernel import camera_reading_inline, sense_one_inline
 from .realism import (
@@ -59,6 +60,8 @@ from .realism import (
     P_Z_MAX,
     P_Z_SHORT,
 )
+
+ensure_fresh()  # numba's cache, in step with every kernel's source (see there)
 
 
 @numba.njit(cache=True, inline="always")

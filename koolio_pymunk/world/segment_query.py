@@ -43,7 +43,10 @@ import numba
 import numpy as np
 import pymunk
 
+from ..store.kernel_cache import ensure_fresh
 from .physics import ALONG, World
+
+ensure_fresh()  # numba's cache, in step with every kernel's source (see there)
 
 #: Dekker's splitting constant for float64 (2^27 + 1).
 _SPLIT = 134217729.0

@@ -44,8 +44,11 @@ import math
 import numba
 import numpy as np
 
+from ..store.kernel_cache import ensure_fresh
 from .physics import ALONG, MAX_QUERIES, MIN_SLIDE, SKIN
 from .segment_query import _CULL_MARGIN, first_contact
+
+ensure_fresh()  # numba's cache, in step with every kernel's source (see there)
 
 # numba bakes these module-level constants into the compiled (and disk-cached) code; the
 # cache is keyed on this file, so a change of them in physics.py needs this file touched
