@@ -45,7 +45,10 @@ A learning loop on the robot (``robot.*`` stands for the robot's own driver code
 Raw readings: ``sonar`` is one distance per sonar (inches from the robot's edge, in the
 order of ``sensors.sonar_sensors_deg``); ``goal_cam`` and ``eow_cam`` are one distance per
 camera to the goal's plate and to the nearest end-of-world marker, ``None`` (or
-``float("inf")``) when the camera does not see one.
+``float("inf")``) when the camera does not see one. A policy learned with several pings
+per sonar (``policy.encoder.sonar_pings`` > 1, ``sensors.sonar.pings`` in the simulator)
+expects each sonar's reading to be the median of that many pings
+(``Encoder.median([robot.ping(s) for _ in range(policy.encoder.sonar_pings)])``).
 
 ``python robot_runtime.py POLICY`` prints a summary of a policy file.
 """
@@ -186,6 +189,10 @@ class Encoder:
         self.n_camera = int(enc["n_camera"])
         self.max_camera_view = float(enc["max_camera_view"])
         self.compass_in_state = bool(enc["compass_in_state"])
+        self.sonar_pings = int(enc.get("sonar_pings", 1))
+        """Pings per sonar and reading the policy was learned with (``encoding.sonar_pings``,
+        1 when absent): the driver pings each sonar this many times and passes the median
+        (:meth:`median`) as the sonar's reading."""
         mem = enc.get("memory") or {}
         self.memory = {k: mem.get(k, v) for k, v in NO_MEMORY.items()}
         """The memory's settings (``encoding.memory``; all off when absent)."""
@@ -239,6 +246,18 @@ class Encoder:
                 raise PolicyError("compass: a reading is needed (the compass is in the state)")
             codes.append(compass_code(float(compass)))
         return tuple(codes)
+
+    @staticmethod
+    def median(pings: Sequence[float]) -> float:
+        """The reading of one sonar from an odd number of pings: their median.
+
+        >>> Encoder.median([40.2, 3.1, 118.0])
+        40.2
+        """
+        values = sorted(float(v) for v in pings)
+        if len(values) % 2 == 0:
+            raise PolicyError(f"sonar: {len(values)} pings (the median needs an odd number)")
+        return values[len(values) // 2]
 
     def _camera(self, v: float | None) -> int:
         if v is None or v > self.max_camera_view:
@@ -700,6 +719,7 @@ def encoding_json(enc: Encoder) -> dict[str, Any]:
         "n_camera": enc.n_camera,
         "max_camera_view": enc.max_camera_view,
         "compass_in_state": enc.compass_in_state,
+        **({"sonar_pings": enc.sonar_pings} if enc.sonar_pings != 1 else {}),
         **({"memory": memory_json(enc.memory)} if enc.remembers else {}),
         "levels": {
             "sonar": list(_level_names(("Bump", "Close", "Medium", "Far"), enc.sonar_thresholds)),
@@ -982,6 +1002,9 @@ def _check_encoding(doc: dict[str, Any], source: str) -> None:
         raise _err(source, "encoding.max_camera_view", "must be a finite number")
     if not isinstance(enc.get("compass_in_state"), bool):
         raise _err(source, "encoding.compass_in_state", "must be true or false")
+    pings = enc.get("sonar_pings", 1)
+    if not _is_int(pings) or pings not in SONAR_PINGS:
+        raise _err(source, "encoding.sonar_pings", "must be odd, 1 to 9 (the median is read)")
     _check_memory(enc.get("memory", NO_MEMORY), source, enc["n_camera"])
     encoder = Encoder(enc)
     for name, ts in (("sonar", encoder.sonar_thresholds), ("camera", encoder.camera_thresholds)):
@@ -997,6 +1020,10 @@ def _check_encoding(doc: dict[str, Any], source: str) -> None:
             source, "layout.fields", f"do not match the encoding (expected {encoder.fields()!r})"
         )
 
+
+#: Pings a sonar may take per reading (``encoding.sonar_pings``; the simulator's
+#: ``sensors.sonar.pings``).
+SONAR_PINGS = (1, 3, 5, 7, 9)
 
 #: Largest ``encoding.memory.forget_after`` (steps; more than any episode's cap).
 MAX_FORGET_AFTER = 10_000

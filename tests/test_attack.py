@@ -558,6 +558,8 @@ def test_policy_json_attacks(work, capsys, text, words):
         (b"rescue: {rescue_max_backup: 1000000, rescue_chance: 1}\n",
          ["rescue.rescue_max_backup: must be <= 100"]),
         (b"sensors: {sonar: {sub_arcs: 100000}}\n", ["sensors.sonar.sub_arcs: must be <= 360"]),
+        (b"sensors: {sonar: {pings: 2}}\n", ["sensors.sonar.pings: must be odd, 1 to 9"]),
+        (b"sensors: {sonar: {pings: 3.5}}\n", ["sensors.sonar.pings: expected an integer"]),
         (b"a: &x [1]\nb: *x\n", ["aliases (*name) are not supported"]),
         (b"x: " + b"[" * 100 + b"]" * 100, ["nested more than 64 levels"]),
     ],

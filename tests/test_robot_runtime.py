@@ -231,3 +231,26 @@ def test_summary_command(policy_file, capsys):
     assert "koolio-policy version 1, 200 states, 7 episodes" in out
     assert "GoalCam0<<25" in out and "Sonar7<<3 | Action" in out
     assert rt.main([str(policy_file) + ".missing"]) == 2
+
+
+def test_the_sonar_pings_travel_to_the_robot(tmp_path):
+    """A policy exported with ``sensors.sonar.pings: 3`` tells the robot's driver to read
+    each sonar as the median of three pings; one exported with 1 says nothing (the file
+    is as before); a bad count is one line."""
+    cfg = Config()
+    plain = policy_document(_table(), cfg=cfg)
+    assert "sonar_pings" not in plain["encoding"]
+    cfg.sensors.sonar.pings = 3
+    doc = policy_document(_table(), cfg=cfg)
+    assert doc["encoding"]["sonar_pings"] == 3
+    write_policy(doc, tmp_path / "p.json")
+    p = rt.Policy.load(str(tmp_path / "p.json"))
+    assert p.encoder.sonar_pings == 3
+    assert rt.Encoder.median([118.0, 3.5, 40.25]) == 40.25
+    assert p.to_document()["encoding"] == doc["encoding"]  # kept by the robot's saves
+    for bad in (2, 0, 11, "3", True):
+        doc["encoding"]["sonar_pings"] = bad
+        with pytest.raises(rt.PolicyError, match="encoding.sonar_pings: must be odd, 1 to 9"):
+            rt.Policy(json.loads(json.dumps(doc)), "p.json")
+    with pytest.raises(rt.PolicyError, match="2 pings"):
+        rt.Encoder.median([1.0, 2.0])

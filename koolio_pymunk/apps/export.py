@@ -124,6 +124,8 @@ def policy_document(
         "max_camera_view": float(sensors["max_camera_view"]),
         "compass_in_state": bool(sensors["compass_in_state"]),
     }
+    if cfg.sensors.sonar.pings != 1:  # how the robot reads its sonar (not in the signature)
+        encoding["sonar_pings"] = cfg.sensors.sonar.pings
     if isinstance(sensors.get("memory"), dict):
         encoding["memory"] = dict(sensors["memory"])
         if encoding["memory"].get("goal_bearing"):  # the cameras the bearing starts from

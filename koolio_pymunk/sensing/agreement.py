@@ -81,13 +81,15 @@ def compare_backends(
     tol: float = 1e-6,
     noise: str = "none",
     world: str | None = None,
+    pings: int = 1,
 ) -> Agreement:
-    """Read both backends at ``n`` random free poses of ``arena_name`` (see module doc)."""
+    """Read both backends at ``n`` random free poses of ``arena_name`` (see module doc),
+    each sonar pinged ``pings`` times (``sensors.sonar.pings``)."""
     cfg = Config()
-    cfg.sensors.noise.model = noise
     if world is not None:
         cfg = apply_world(cfg, world)
-        cfg.sensors.noise.model = noise
+    cfg.sensors.noise.model = noise
+    cfg.sensors.sonar.pings = pings
     radius = cfg.robot.radius
     arena = load_arena(arena_name, radius).to_world()
     space = World(arena.segments(), radius)

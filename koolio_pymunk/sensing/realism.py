@@ -22,6 +22,8 @@ the paper's noise, in this order:
    with weights ``z_hit`` (Gaussian around the true range, ``sigma_hit``), ``z_short``
    (an unexpected near echo: exponential with rate ``lambda_short``, truncated at the
    true range), ``z_max`` (a dropout: no echo) and ``z_rand`` (uniform over the range);
+   with ``sensors.sonar.pings`` k > 1 the robot pings k times and reads the median of
+   k such draws (a lone wrong echo is dropped);
 4. *minimum range*: a reading below ``min_range`` reads ``min_range``.
 
 **Cameras** (:class:`CameraRealism`): a camera with another door's plate in view takes
@@ -40,10 +42,11 @@ pymunk still resolves every contact (:meth:`World.drive`).
 uniformly from their ranges (:class:`Randomizer`); the draw is logged.
 
 Every random number comes from the environment's generator. A reading with any sonar
-or camera model on draws ``4 * n_sonar + 3 * n_camera`` uniforms in one call, after the
-paper's noise draws (:func:`realism_draw_count`), and the compiled kernel
-(:mod:`koolio_pymunk.sensing.realism_kernel`) uses them exactly as :func:`apply_reference` does
-here, so both give the same readings bit for bit (``tests/sensing/test_realism.py``).
+or camera model on draws ``4 * n_sonar + 3 * n_camera`` uniforms in one call (and
+``3 * n_sonar`` more per extra ping, after those), after the paper's noise draws
+(:func:`realism_draw_count`), and the compiled kernel
+(:mod:`koolio_pymunk.sensing.realism_kernel`) uses them exactly as :func:`apply_reference`
+does here, so both give the same readings bit for bit (``tests/sensing/test_realism.py``).
 
 Example (the reference on one sonar of two rays and one camera; off models change
 nothing)::
@@ -81,11 +84,29 @@ from ..store.realism_config import RealismConfig, beam_on, camera_on, sonar_on
 # --- what is on ----------------------------------------------------------------------
 
 
-def realism_draw_count(n_sonar: int, n_camera: int) -> int:
+def realism_draw_count(n_sonar: int, n_camera: int, pings: int = 1) -> int:
     """Uniform draws of one reading with a sonar or camera model on: per sonar the beam
     component, two values and the crosstalk draw; per camera the misread, goal detection
-    and marker detection draws."""
-    return 4 * n_sonar + 3 * n_camera
+    and marker detection draws; then per extra ping and sonar the beam's three draws
+    (:func:`ping_draw`).
+
+    >>> realism_draw_count(8, 3), realism_draw_count(8, 3, pings=3)
+    (41, 89)
+    """
+    return 4 * n_sonar + 3 * n_camera + 3 * (pings - 1) * n_sonar
+
+
+def ping_draw(n_sonar: int, n_camera: int, sonar: int, ping: int) -> int:
+    """Index of the first of the beam model's three draws for ``ping`` (0-based) of
+    ``sonar``: ping 0 uses the sonar's own four (``4 * sonar``), so one ping draws as
+    before pings existed; the others come after the cameras', ping by ping.
+
+    >>> ping_draw(8, 3, sonar=2, ping=0), ping_draw(8, 3, sonar=2, ping=1)
+    (8, 47)
+    """
+    if ping == 0:
+        return 4 * sonar
+    return 4 * n_sonar + 3 * n_camera + 3 * ((ping - 1) * n_sonar + sonar)
 
 
 # --- sensor models: parameters and the reference --------------------------------------
@@ -95,7 +116,8 @@ P_COS_LIMIT, P_RANGE, P_MIN_RANGE, P_CROSSTALK = 0, 1, 2, 3
 P_Z_HIT, P_Z_SHORT, P_Z_MAX, P_Z_RAND, P_SIGMA, P_LAMBDA = 4, 5, 6, 7, 8, 9
 P_DETECT_NEAR, P_DETECT_FAR, P_VIEW, P_MISREAD = 10, 11, 12, 13
 P_RADIUS, P_FAR, P_LENGTH = 14, 15, 16
-N_PARAMS = 17
+P_PINGS, P_PING_DRAWS = 17, 18  # pings per reading; where the extra pings' draws start
+N_PARAMS = 19
 #: Indices of :attr:`SensorRealism.flags`.
 F_SONAR, F_INCIDENCE, F_RANGE, F_CROSSTALK, F_BEAM, F_CAMERA, F_DETECT, F_MISREAD = range(8)
 N_FLAGS = 8
@@ -118,8 +140,10 @@ class SensorRealism:
         ray_length: float,
         far: float,
         max_camera_view: float,
+        pings: int = 1,
     ) -> None:
         self.n_sonar = len(sonar_deg)
+        self.pings = int(pings)
         self.n_camera = int(n_camera)
         self.radius = float(radius)
         self.ray_length = float(ray_length)
@@ -154,6 +178,8 @@ class SensorRealism:
         p[P_VIEW] = self.max_camera_view
         p[P_MISREAD] = ca.misread
         p[P_RADIUS], p[P_FAR], p[P_LENGTH] = self.radius, self.far, self.ray_length
+        p[P_PINGS] = self.pings
+        p[P_PING_DRAWS] = realism_draw_count(self.n_sonar, self.n_camera)
         f[F_SONAR] = sonar_on(cfg)
         f[F_INCIDENCE] = so.max_incidence_deg < 90.0
         f[F_RANGE] = so.max_range is not None
@@ -181,7 +207,7 @@ class SensorRealism:
     @property
     def n_draws(self) -> int:
         """Uniform draws per reading (:func:`realism_draw_count`)."""
-        return realism_draw_count(self.n_sonar, self.n_camera)
+        return realism_draw_count(self.n_sonar, self.n_camera, self.pings)
 
 
 def ring_neighbours(sonar_deg: Sequence[float]) -> np.ndarray:
@@ -255,7 +281,11 @@ def apply_reference(
             z, crossed = _crosstalk(z, draws, model.neighbours, p[P_CROSSTALK])
         for s in range(n):
             if f[F_BEAM]:
-                z[s] = _beam(float(z[s]), draws[4 * s : 4 * s + 3], p)
+                pings = [
+                    _beam(float(z[s]), draws[k : k + 3], p)
+                    for k in (ping_draw(n, m, s, j) for j in range(model.pings))
+                ]
+                z[s] = sorted(pings)[len(pings) // 2]
             if p[P_MIN_RANGE] > 0.0 and z[s] < p[P_MIN_RANGE]:
                 z[s] = p[P_MIN_RANGE]
         out[:n] = z

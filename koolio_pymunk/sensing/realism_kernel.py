@@ -52,6 +52,8 @@ from .realism import (
     P_LENGTH,
     P_MIN_RANGE,
     P_MISREAD,
+    P_PING_DRAWS,
+    P_PINGS,
     P_RADIUS,
     P_RANGE,
     P_SIGMA,
@@ -146,14 +148,34 @@ def _sonar(
                     raw[s] = before[nb]
                     crossed[s] = True
     beam, min_range = f[F_BEAM], p[P_MIN_RANGE]
+    pings = int(p[P_PINGS])
+    heard = np.empty(pings if beam and pings > 1 else 0)
+    extra = base + int(p[P_PING_DRAWS])
     for s in range(n):
         v = raw[s]
         if beam:
             k = base + 4 * s
-            v = _beam(v, draws[k], draws[k + 1], draws[k + 2], p)
+            v0 = v
+            v = _beam(v0, draws[k], draws[k + 1], draws[k + 2], p)
+            if pings > 1:
+                heard[0] = v
+                for j in range(1, pings):
+                    k = extra + 3 * ((j - 1) * n + s)
+                    _insert(heard, j, _beam(v0, draws[k], draws[k + 1], draws[k + 2], p))
+                v = heard[pings // 2]
         if min_range > 0.0 and v < min_range:
             v = min_range
         raw[s] = v
+
+
+@numba.njit(cache=True, inline="always")
+def _insert(sorted_head: np.ndarray, j: int, v: float) -> None:
+    """Insert ``v`` into the sorted ``sorted_head[:j]`` (insertion sort's step)."""
+    i = j
+    while i > 0 and sorted_head[i - 1] > v:
+        sorted_head[i] = sorted_head[i - 1]
+        i -= 1
+    sorted_head[i] = v
 
 
 @numba.njit(cache=True, inline="always")

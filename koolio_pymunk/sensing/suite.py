@@ -166,6 +166,7 @@ class SensorSuite:
             self.ray_length,
             self.far,
             ca.max_camera_view,
+            pings=so.pings,
         )
         """The sonar and camera realism models (:mod:`koolio_pymunk.sensing.realism`)."""
         self._check_realism()

@@ -108,6 +108,13 @@ class SonarConfig:
     lines); ultrasonic rangers reach metres, not hundreds of them."""
     noise: float = 0.10
     """Noise fraction, in [0, 1) (paper: ten percent)."""
+    pings: int = 1
+    """Pings per sonar and reading, odd, 1..9; the sonar reads their median (not in the
+    paper, whose simulated sonar is exact; the usual read-out of a real ranger, e.g.
+    Arduino NewPing's ``ping_median``). Each ping draws the realism's beam model anew, so
+    the median drops a lone wrong echo (``docs/reality-gap.md``); in the ideal world every
+    ping hears the same echo and more pings change nothing. The paper's ``noise`` applies
+    once, to the median."""
     groups: list[list[int]] = field(default_factory=lambda: [[0], [1, 2], [3], [4], [5, 6], [7]])
     """Sonars whose readings are averaged into one state value, in keyword order
     (paper: 1&2 and 5&6 averaged, leaving 6 values)."""
@@ -568,6 +575,9 @@ def _validate(cfg: Config, src: str) -> None:
     _check(so.max_range > 0, src, "sensors.sonar.max_range", "must be > 0")
     _check(0 <= so.noise < 1, src, "sensors.sonar.noise", "must be in [0, 1)")
     _check(
+        so.pings in PINGS, src, "sensors.sonar.pings", "must be odd, 1 to 9 (the median is read)"
+    )
+    _check(
         _increasing(so.thresholds) and len(so.thresholds) >= 1,
         src,
         "sensors.sonar.thresholds",
@@ -657,6 +667,8 @@ LIMITS: dict[str, tuple[float, str]] = {
     "sensors.noise.scale": (10, "times each sensor's noise fraction"),
     "sensors.memory.forget_after": (10_000, "steps; more than any episode's cap"),
 }
+#: Pings a sonar may take per reading (``SonarConfig.pings``): odd, so the median is one.
+PINGS = (1, 3, 5, 7, 9)
 #: Upper bounds of the sensors' ranges, inches (checked with the ranges' own order:
 #: ``really_long_distance`` above both).
 MAX_SENSOR_RANGE = 10_000.0

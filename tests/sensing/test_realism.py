@@ -274,6 +274,53 @@ def test_fast_kernel_agrees_with_reference_under_every_model(tmp_path) -> None:
         assert got.bit_identical == 80
 
 
+@pytest.mark.parametrize("pings", [3, 5])
+def test_fast_kernel_agrees_with_reference_with_several_pings(tmp_path, pings: int) -> None:
+    world = world_file(tmp_path, ALL_ON)
+    got = compare_backends("hallway", 60, seed=7, noise="uniform", world=str(world), pings=pings)
+    assert (got.distance_mismatches, got.state_mismatches) == (0, 0)
+    assert got.bit_identical == 60
+
+
+def test_pings_read_the_median_of_the_beam_draws() -> None:
+    """Three pings of one sonar (one ray, wall at 40 in): the first ping's short echo
+    and the third's dropout are outvoted by the second's hit; the draws of the extra
+    pings come after the sonar's own four (and the cameras', none here)."""
+    real = RealismConfig()
+    so = real.sonar
+    so.z_hit, so.z_short, so.z_max, so.z_rand = 0.4, 0.3, 0.2, 0.1
+    so.sigma_hit, so.lambda_short, so.max_range = 2.0, 0.05, 100.0
+    model = SensorRealism(real, [0.0], 0, 10.0, 250.0, FAR, 240.0, pings=3)
+    assert model.n_draws == 4 + 3 + 3
+    raw, rays = np.array([40.0, 0.0]), np.array([[50.0]])
+    cos, decoy = np.ones((1, 1)), np.zeros(0)
+    short_draws = (0.5, 0.5, 0.0)  # as test_beam_model_components_exact
+    hit_draws, max_draws = (0.1, 0.3, 0.1), (0.8, 0.5, 0.0)
+    draws = np.array([*short_draws, 0.9, *hit_draws, *max_draws])
+    got = float(apply_reference(model, raw, rays, cos, decoy, draws).raw[0])
+    gauss = math.sqrt(-2.0 * math.log(1.0 - 0.3)) * math.cos(2.0 * math.pi * 0.1)
+    assert got == 40.0 + 2.0 * gauss
+    fast = raw.copy()
+    echo, crossed = np.empty((1, 1), bool), np.empty(1, bool)
+    apply_realism(fast, rays, cos, decoy, draws, model.params, model.flags, model.neighbours,
+                  echo, crossed, np.empty((0, 2), bool), np.empty(0, bool))  # fmt: skip
+    assert float(fast[0]) == got
+    one = SensorRealism(real, [0.0], 0, 10.0, 250.0, FAR, 240.0)  # one ping: the short echo
+    assert float(apply_reference(one, raw, rays, cos, decoy, draws[:4]).raw[0]) < 40.0
+
+
+def test_several_pings_change_nothing_in_the_ideal_world(tmp_path) -> None:
+    """No beam model, no draws: more pings give the ideal world's table, byte for byte."""
+    tables = []
+    for pings in (1, 5):
+        cfg = load_config(overrides={"sensors": {"sonar": {"pings": pings}}})
+        env = KoolioEnv("hallway", config=cfg)
+        store = QTableStore(tmp_path / f"p{pings}.qtable")
+        train(env, store, 20, 3, tmp_path / f"p{pings}.csv", report=None)
+        tables.append(store.path.read_bytes())
+    assert tables[0] == tables[1]
+
+
 def test_every_model_acts_on_some_readings(tmp_path) -> None:
     """The agreement above is not vacuous: on the hallway each model changes readings."""
     cfg = load_config(world=world_file(tmp_path, ALL_ON))

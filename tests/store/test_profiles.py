@@ -24,12 +24,15 @@ def test_paper_profile_loads_by_name() -> None:
 
 
 def test_paper_memory_profile_is_the_paper_plus_memory() -> None:
-    """``paper-memory`` differs from ``paper`` in ``sensors.memory`` only."""
+    """``paper-memory`` differs from ``paper`` in ``sensors.memory`` and the sonar's pings
+    only (a read-out that changes nothing in the ideal world)."""
     paper, mem = load_config("paper"), load_config("paper-memory")
     assert mem.sensors.memory.goal_camera and mem.sensors.memory.previous_action
     assert not (mem.sensors.memory.eow_camera or mem.sensors.memory.forget_after)
     assert [name for name, _ in state_fields(mem.sensors)][-2:] == ["GoalMemory", "LastAction"]
+    assert (paper.sensors.sonar.pings, mem.sensors.sonar.pings) == (1, 3)
     mem.sensors.memory = paper.sensors.memory
+    mem.sensors.sonar.pings = 1
     assert mem == paper
 
 
