@@ -106,6 +106,8 @@ LEARNING_TARGETS_BUDGET = (
     ("--paper-episodes", "5"),
     ("--paper-every", "5"),
     ("--random-episodes", "5"),
+    ("--random-every", "5"),
+    ("--random-check-episodes", "2"),
     ("--fresh-episodes", "2"),
 )
 
