@@ -10,7 +10,9 @@ Sections (each printed as a table row, all written to ``--out`` as JSON):
   steps per second, and the fast/reference ratio;
 * **koolio-real**: the same compiled loop in the realistic world (``--world
   koolio-real``: every realism model on), next to the ideal world's row above: steps per
-  second and the ratio to the ideal world;
+  second and the ratio to the ideal world; then the same world with one family of its
+  models off (:func:`realism_without`: the motion errors; the sonar's beam model), which
+  says where its extra cost per step goes;
 * **paper-memory**: the compiled loop and the Python loop with ``--config paper-memory``
   (the goal camera and the last action remembered in the state);
 * **train (end to end)**: :func:`training.train` as ``koolio-pm train`` runs it (the
@@ -527,6 +529,28 @@ def machine() -> dict:
     }
 
 
+def realism_without(folder: Path) -> dict[str, Path]:
+    """World files: ``koolio-real`` with its motion errors off, and with its sonar beam
+    model off (every reading exact; the echo, incidence and range models stay)."""
+    import yaml
+
+    from koolio_pymunk.store.config import PROFILE_DIR
+
+    parts = {
+        "motion errors": lambda r: r.pop("motion"),
+        "sonar beam model": lambda r: r["sonar"].update(
+            z_hit=1.0, z_short=0.0, z_max=0.0, z_rand=0.0, sigma_hit=0.0
+        ),
+    }
+    out = {}
+    for name, cut in parts.items():
+        doc = yaml.safe_load((PROFILE_DIR / "koolio-real.yaml").read_text())
+        cut(doc["realism"])
+        out[name] = folder / f"koolio-real-without-{name.split()[-1]}.yaml"
+        out[name].write_text(yaml.safe_dump(doc))
+    return out
+
+
 def table_line(name: str, r: dict, extra: str = "") -> str:
     return (
         f"  {name:<34} {r['per_wall_s']:>10,} {r['per_cpu_s']:>10,}   "
@@ -598,6 +622,13 @@ def main(argv: list[str] | None = None) -> int:
         real["ratio_to_ideal_cpu"] = round(real_ratio, 3)
         real["ratio_to_ideal_wall"] = round(real["per_wall_s"] / max(1, fast["per_wall_s"]), 3)
         print(table_line("koolio-real world steps/s", real, f"{real_ratio:.0%} of ideal (CPU)"))
+        real["without"] = {}
+        for part, path in realism_without(folder).items():
+            r = learning_loop("fast", 60_000 if q else 300_000, world=str(path))
+            r["ratio_to_ideal_cpu"] = round(r["per_cpu_s"] / max(1, fast["per_cpu_s"]), 3)
+            real["without"][part] = r
+            share = f"{r['ratio_to_ideal_cpu']:.0%} of ideal (CPU)"
+            print(table_line(f"  koolio-real, no {part}", r, share))
         mem = learning_loop("fast", 60_000 if q else 150_000, config="paper-memory")
         mem_py = learning_loop(
             "fast", 30_000 if q else 60_000, compiled=False, config="paper-memory"

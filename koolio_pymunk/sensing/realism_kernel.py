@@ -149,7 +149,6 @@ def _sonar(
                     crossed[s] = True
     beam, min_range = f[F_BEAM], p[P_MIN_RANGE]
     pings = int(p[P_PINGS])
-    heard = np.empty(pings if beam and pings > 1 else 0)
     extra = base + int(p[P_PING_DRAWS])
     for s in range(n):
         v = raw[s]
@@ -157,7 +156,8 @@ def _sonar(
             k = base + 4 * s
             v0 = v
             v = _beam(v0, draws[k], draws[k + 1], draws[k + 2], p)
-            if pings > 1:
+            if pings > 1:  # (one ping, the common case, allocates nothing)
+                heard = np.empty(pings)
                 heard[0] = v
                 for j in range(1, pings):
                     k = extra + 3 * ((j - 1) * n + s)
