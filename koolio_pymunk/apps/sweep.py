@@ -516,6 +516,8 @@ def run_one(task: dict[str, Any]) -> dict[str, Any]:
 
     cfg = config_from_dict(task["config"], task["run_id"])
     env = KoolioEnv(arena=task["arena_obj"], config=cfg, goal=task["goal"])
+    if task.get("world") is not None:  # its realism is in cfg; the table records its name
+        env.world_name = str(task["world"])
     seed = int(task["seed"])
     episodes, every = int(task["episodes"]), int(task["eval_every"])
     checkpoints: list[dict[str, Any]] = []

@@ -99,6 +99,25 @@ def test_resume_skips_finished_runs_and_matches(spec_file, tmp_path, capsys):
     assert _rows(out) == first
 
 
+def test_a_run_in_another_world_records_it_in_its_table(tmp_path):
+    """As ``train --world`` does: resuming or continuing the table elsewhere is refused."""
+    from koolio_pymunk.learning.qtable import load_qtable
+
+    spec = load_spec_text(
+        tmp_path, SPEC.replace("seeds: [0, 1]", "seeds: [0]") + "world: koolio-real\n"
+    )
+    run_sweep(spec, tmp_path / "out", workers=1, plot=False, report=None)
+    tables = sorted((tmp_path / "out").glob("runs/*/*/qtable.qtable"))
+    assert len(tables) == 2
+    assert {load_qtable(t).meta.get("world") for t in tables} == {"koolio-real"}
+
+
+def load_spec_text(folder: Path, text: str):
+    path = folder / "spec.yaml"
+    path.write_text(text)
+    return load_spec(path)
+
+
 def test_spec_grid_and_runs_make_configurations(tmp_path):
     spec = parse_spec(
         {
