@@ -250,7 +250,7 @@ def test_the_sonar_pings_travel_to_the_robot(tmp_path):
     assert p.to_document()["encoding"] == doc["encoding"]  # kept by the robot's saves
     for bad in (2, 0, 11, "3", True):
         doc["encoding"]["sonar_pings"] = bad
-        with pytest.raises(rt.PolicyError, match="encoding.sonar_pings: must be odd, 1 to 9"):
+        with pytest.raises(rt.PolicyError, match=r"encoding\.sonar_pings: must be odd, 1 to 9"):
             rt.Policy(json.loads(json.dumps(doc)), "p.json")
     with pytest.raises(rt.PolicyError, match="2 pings"):
         rt.Encoder.median([1.0, 2.0])

@@ -636,8 +636,9 @@ class ViewerApp:
         return [
             "mode: " + ("learning" if s.learn else "greedy (read-only table)"),
             f"arena: {self.env.arena.name}   seed: {s.seed}",
-            f"world: {self.env.world_name}   config: {self.config_name}",
-            *realism_lines(self.env.config),
+            f"world: {self.env.world_name}",  # a line of its own: a long config path
+            *realism_lines(self.env.config),  # shortened to the panel's width hides nothing
+            f"config: {self.config_name}",
             "table: " + table,
             "log: " + (str(s.log_path) if s.log_path else "none"),
         ]

@@ -452,10 +452,11 @@ def test_world_profile_in_the_panel_and_over_the_arena(tmp_path, config) -> None
     app.draw()
     assert "WORLD: KOOLIO-REAL-DR" in app.drawn["tags"]
     lines = app.info_lines()
-    i = next(k for k, line in enumerate(lines) if line.startswith("world: koolio-real-dr "))
-    assert lines[i + 1 : i + 3] == [
+    i = lines.index("world: koolio-real-dr")
+    assert lines[i + 1 : i + 4] == [
         "realism: sonar, camera, motion",
         "randomized: 11 parameters per episode",
+        "config: default",
     ]
     ideal = make_app(tmp_path / "ideal", config)
     ideal.draw()
