@@ -40,6 +40,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from ..robot_runtime import SONAR_PINGS
 from .errors import ConfigError, located, shown
 from .keyword import COMPASS_LEVELS, MAX_KEYWORD_BITS, N_ACTIONS, KeywordLayout
 from .realism_config import RealismConfig, validate_realism
@@ -667,8 +668,9 @@ LIMITS: dict[str, tuple[float, str]] = {
     "sensors.noise.scale": (10, "times each sensor's noise fraction"),
     "sensors.memory.forget_after": (10_000, "steps; more than any episode's cap"),
 }
-#: Pings a sonar may take per reading (``SonarConfig.pings``): odd, so the median is one.
-PINGS = (1, 3, 5, 7, 9)
+#: Pings a sonar may take per reading (``SonarConfig.pings``): odd, so the median is one
+#: (the robot runtime's list, which checks a policy's ``encoding.sonar_pings``).
+PINGS = SONAR_PINGS
 #: Upper bounds of the sensors' ranges, inches (checked with the ranges' own order:
 #: ``really_long_distance`` above both).
 MAX_SENSOR_RANGE = 10_000.0
