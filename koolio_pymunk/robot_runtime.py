@@ -1582,6 +1582,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(f"{args[0]}: {FORMAT} version {VERSION}, {len(p.rows)} states, {p.episodes} episodes")
     print(f"keyword ({lay.total_bits} bits): {keyword} | Action")
     print(f"sonar thresholds {enc.sonar_thresholds}, camera thresholds {enc.camera_thresholds}")
+    if enc.sonar_pings != 1:
+        print(f"each sonar read as the median of {enc.sonar_pings} pings (Encoder.median)")
     params = ", ".join(f"{k} {p.learner[k]}" for k in ALGORITHMS[p.algorithm])
     model = f", model of {len(p.model.pairs)} pairs" if p.model is not None else ""
     print(f"learner: {p.algorithm}" + (f" ({params})" if params else "") + model)

@@ -233,7 +233,7 @@ def test_summary_command(policy_file, capsys):
     assert rt.main([str(policy_file) + ".missing"]) == 2
 
 
-def test_the_sonar_pings_travel_to_the_robot(tmp_path):
+def test_the_sonar_pings_travel_to_the_robot(tmp_path, capsys):
     """A policy exported with ``sensors.sonar.pings: 3`` tells the robot's driver to read
     each sonar as the median of three pings; one exported with 1 says nothing (the file
     is as before); a bad count is one line."""
@@ -248,6 +248,8 @@ def test_the_sonar_pings_travel_to_the_robot(tmp_path):
     assert p.encoder.sonar_pings == 3
     assert rt.Encoder.median([118.0, 3.5, 40.25]) == 40.25
     assert p.to_document()["encoding"] == doc["encoding"]  # kept by the robot's saves
+    assert rt.main([str(tmp_path / "p.json")]) == 0
+    assert "each sonar read as the median of 3 pings" in capsys.readouterr().out
     for bad in (2, 0, 11, "3", True):
         doc["encoding"]["sonar_pings"] = bad
         with pytest.raises(rt.PolicyError, match=r"encoding\.sonar_pings: must be odd, 1 to 9"):
