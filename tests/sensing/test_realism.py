@@ -361,6 +361,7 @@ def test_forced_neutral_pipeline_reads_like_the_ideal_world() -> None:
 def small_run(tmp_path: Path, name: str, world: Path | None, episodes: int, **kw) -> tuple:
     cfg = Config()
     cfg.episode.max_steps = 120
+    cfg.sensors.sonar.pings = kw.get("pings", 1)
     env = KoolioEnv("room", config=cfg, world=world)
     store = QTableStore(tmp_path / f"{name}.qtable")
     train(env, store, episodes, seed=kw.get("seed", 4), log_path=tmp_path / f"{name}.csv",
@@ -395,6 +396,15 @@ def test_seeded_runs_with_every_model_on_are_identical_and_resume_exactly(tmp_pa
     assert len(draws) == 4 and len({tuple(d) for d in draws}) == 4
     for misread, drift, sigma, z_rand in draws:
         assert 0 <= misread <= 0.5 and -2 <= drift <= 2 and 0 <= sigma <= 6 and 0 <= z_rand <= 0.2
+
+
+def test_several_pings_are_seeded_and_resume_exactly(tmp_path) -> None:
+    world = world_file(tmp_path, ALL_ON_DR)
+    first = small_run(tmp_path, "a", world, 4, pings=3)
+    assert first == small_run(tmp_path, "b", world, 4, pings=3)
+    small_run(tmp_path, "c", world, 2, pings=3)
+    assert small_run(tmp_path, "c", world, 2, pings=3) == first
+    assert first[1] != small_run(tmp_path, "one", world, 4)[1]  # the pings change the run
 
 
 def test_randomized_episode_parameters_reach_the_models(tmp_path) -> None:
