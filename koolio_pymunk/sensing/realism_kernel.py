@@ -150,14 +150,15 @@ def _sonar(
     beam, min_range = f[F_BEAM], p[P_MIN_RANGE]
     pings = int(p[P_PINGS])
     extra = base + int(p[P_PING_DRAWS])
+    if beam and pings > 1:  # one buffer per reading (one ping, the common case: none)
+        heard = np.empty(pings)
     for s in range(n):
         v = raw[s]
         if beam:
             k = base + 4 * s
             v0 = v
             v = _beam(v0, draws[k], draws[k + 1], draws[k + 2], p)
-            if pings > 1:  # (one ping, the common case, allocates nothing)
-                heard = np.empty(pings)
+            if pings > 1:
                 heard[0] = v
                 for j in range(1, pings):
                     k = extra + 3 * ((j - 1) * n + s)
