@@ -536,17 +536,21 @@ def realism_without(folder: Path) -> dict[str, Path]:
 
     from koolio_pymunk.store.config import PROFILE_DIR
 
-    parts = {
-        "motion errors": lambda r: r.pop("motion"),
-        "sonar beam model": lambda r: r["sonar"].update(
-            z_hit=1.0, z_short=0.0, z_max=0.0, z_rand=0.0, sigma_hit=0.0
+    parts = {  # name -> (file name's part, what to take out of the realism section)
+        "motion errors": ("motion", lambda r: r.pop("motion")),
+        "sonar beam model": (
+            "beam",
+            lambda r: r["sonar"].update(
+                z_hit=1.0, z_short=0.0, z_max=0.0, z_rand=0.0, sigma_hit=0.0
+            ),
         ),
     }
+    text = (PROFILE_DIR / "koolio-real.yaml").read_text()
     out = {}
-    for name, cut in parts.items():
-        doc = yaml.safe_load((PROFILE_DIR / "koolio-real.yaml").read_text())
+    for name, (slug, cut) in parts.items():
+        doc = yaml.safe_load(text)
         cut(doc["realism"])
-        out[name] = folder / f"koolio-real-without-{name.split()[-1]}.yaml"
+        out[name] = folder / f"koolio-real-without-{slug}.yaml"
         out[name].write_text(yaml.safe_dump(doc))
     return out
 

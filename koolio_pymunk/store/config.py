@@ -576,7 +576,10 @@ def _validate(cfg: Config, src: str) -> None:
     _check(so.max_range > 0, src, "sensors.sonar.max_range", "must be > 0")
     _check(0 <= so.noise < 1, src, "sensors.sonar.noise", "must be in [0, 1)")
     _check(
-        so.pings in PINGS, src, "sensors.sonar.pings", "must be odd, 1 to 9 (the median is read)"
+        so.pings in SONAR_PINGS,  # the runtime's list, which checks encoding.sonar_pings
+        src,
+        "sensors.sonar.pings",
+        "must be odd, 1 to 9 (the median is read)",
     )
     _check(
         _increasing(so.thresholds) and len(so.thresholds) >= 1,
@@ -668,9 +671,6 @@ LIMITS: dict[str, tuple[float, str]] = {
     "sensors.noise.scale": (10, "times each sensor's noise fraction"),
     "sensors.memory.forget_after": (10_000, "steps; more than any episode's cap"),
 }
-#: Pings a sonar may take per reading (``SonarConfig.pings``): odd, so the median is one
-#: (the robot runtime's list, which checks a policy's ``encoding.sonar_pings``).
-PINGS = SONAR_PINGS
 #: Upper bounds of the sensors' ranges, inches (checked with the ranges' own order:
 #: ``really_long_distance`` above both).
 MAX_SENSOR_RANGE = 10_000.0
