@@ -2,9 +2,9 @@
 
 The sensors need two geometric answers (see :mod:`koolio_pymunk.sensing.suite`):
 
-* ``cast(x, y, angles, length)``: for each ray from ``(x, y)`` along ``angles`` (radians),
-  the distance from ``(x, y)`` to the first wall segment, or ``length`` when none is hit
-  within ``length``;
+* ``cast(x, y, dirs, length)``: for each ray from ``(x, y)`` along the unit vector
+  ``(dirs[0][i], dirs[1][i])``, the distance from ``(x, y)`` to the first wall segment, or
+  ``length`` when none is hit within ``length``;
 * ``line_of_sight(x, y, tx, ty)``: no wall segment crosses the sight line from ``(x, y)``
   to ``(tx, ty)`` (a wall whose *line* crosses it beyond the segment's ends does not block).
 
@@ -12,6 +12,8 @@ The sensors need two geometric answers (see :mod:`koolio_pymunk.sensing.suite`):
 reference. :class:`FastRays` answers with :mod:`koolio_pymunk.world.segment_query`, the
 compiled twin of the same Chipmunk query. ``sensors.backend`` picks one
 (:func:`make_engine`).
+
+The rays' directions come from the sensor suite (:func:`~.suite.turned`).
 """
 
 from __future__ import annotations
@@ -32,30 +34,30 @@ class PymunkRays:
     def __init__(self, world: World) -> None:
         self.world = world
 
-    def cast(self, x: float, y: float, angles: np.ndarray, length: float) -> np.ndarray:
-        ends_x = x + length * np.cos(angles)
-        ends_y = y + length * np.sin(angles)
+    def cast(self, x: float, y: float, dirs: np.ndarray, length: float) -> np.ndarray:
+        ends_x = x + length * dirs[0]
+        ends_y = y + length * dirs[1]
         query = self.world.space.segment_query_first
-        out = np.full(angles.shape, length)
+        out = np.full(ends_x.shape, length)
         start = (x, y)
-        for idx in np.ndindex(angles.shape):
+        for idx in np.ndindex(ends_x.shape):
             hit = query(start, (float(ends_x[idx]), float(ends_y[idx])), 0.0, WALL_ONLY)
             if hit is not None:
                 out[idx] = hit.alpha * length
         return out
 
     def cast_incidence(
-        self, x: float, y: float, angles: np.ndarray, length: float
+        self, x: float, y: float, dirs: np.ndarray, length: float
     ) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`cast` and each ray's incidence cosine ``|cos(a) nx + sin(a) ny|`` on the
         wall it hits, with pymunk's reported normal (0 where nothing is hit)."""
-        cos_a, sin_a = np.cos(angles), np.sin(angles)
+        cos_a, sin_a = dirs[0], dirs[1]
         ends_x = x + length * cos_a
         ends_y = y + length * sin_a
         query = self.world.space.segment_query_first
-        out = np.full(angles.shape, length)
-        inc = np.zeros(angles.shape)
-        for idx in np.ndindex(angles.shape):
+        out = np.full(ends_x.shape, length)
+        inc = np.zeros(ends_x.shape)
+        for idx in np.ndindex(ends_x.shape):
             hit = query((x, y), (float(ends_x[idx]), float(ends_y[idx])), 0.0, WALL_ONLY)
             if hit is not None:
                 out[idx] = hit.alpha * length
@@ -79,8 +81,8 @@ class FastRays:
         self.world = world
         self.walls = wall_array(world)
 
-    def cast(self, x: float, y: float, angles: np.ndarray, length: float) -> np.ndarray:
-        return cast(float(x), float(y), np.ascontiguousarray(angles, float), length, self.walls)
+    def cast(self, x: float, y: float, dirs: np.ndarray, length: float) -> np.ndarray:
+        return cast(float(x), float(y), np.ascontiguousarray(dirs, float), length, self.walls)
 
     def line_of_sight(self, x: float, y: float, tx: float, ty: float) -> bool:
         return bool(line_of_sight(float(x), float(y), float(tx), float(ty), self.walls))

@@ -6,7 +6,8 @@ the exact nearest wall inside each sonar's cone: :func:`cone_nearest`), every ca
 arc test and line of sight to the goal plate and the end-of-world markers, and the
 compass. :func:`sense_batch` does it for many robots at once. The rays are
 :mod:`koolio_pymunk.world.segment_query`'s (Chipmunk's radius-0 segment query, compiled):
-ray ends are ``x + length * cos(angle)`` as the pymunk reference computes them, and walls
+ray ends are ``x + length * c`` with ``(c, s)`` each ray's unit vector turned by the heading as
+the reference turns it (:func:`~koolio_pymunk.sensing.suite.turned`), and walls
 are culled by bounding box, first those beyond the sonar range, then, per sonar, those
 outside the box of its rays (grown by 1 in); a culled wall cannot be hit.
 
@@ -41,8 +42,9 @@ TRIG_SLOTS = 4
 def new_trig(n_rays: int, n_robots: int | None = None) -> np.ndarray:
     """An empty trigonometry cache for :func:`sense_one` (one per robot with ``n_robots``).
 
-    Rows ``0 .. TRIG_SLOTS - 1`` each hold a heading and the ``cos`` and ``sin`` of every
-    ray at that heading; element 0 of the last row is the slot to fill next.
+    Rows ``0 .. TRIG_SLOTS - 1`` each hold a heading and the unit vector (``cos``, then
+    ``sin``) of every ray at that heading; element 0 of the last row is the slot to fill
+    next.
     """
     shape = (TRIG_SLOTS + 1, 1 + 2 * n_rays)
     if n_robots is not None:
@@ -147,11 +149,11 @@ def sense_one(x: float, y: float, h: float, geometry: tuple, goal: np.ndarray, p
     ``ray_cos`` = the cosine of each ray's incidence on the wall it hits (0: no hit), and
     with ``plates`` not empty ``decoy`` = per camera the nearest of ``plates`` (the other
     doors' plates) in its arc and in sight (far: none).
-    ``trig`` (:func:`new_trig`) caches every ray's ``cos`` and ``sin`` for the last few
-    headings: moves and stops keep the heading and turns often come back to one, so few
-    readings pay for the trigonometry (the values are the same either way).
+    ``trig`` (:func:`new_trig`) caches every ray's unit vector for the last few headings:
+    in the ideal world moves and stops keep the heading and turns often come back to one,
+    so few readings turn the rays (the values are the same either way).
     """
-    ray_offsets, params, camera_dirs, markers, walls = geometry
+    ray_offsets, ray_units, params, camera_dirs, markers, walls = geometry
     raw, rays, eow_k, trig, ray_cos, decoy = buffers
     length = params[0]
     radius = params[1]
@@ -164,7 +166,7 @@ def sense_one(x: float, y: float, h: float, geometry: tuple, goal: np.ndarray, p
     if params[4] == 1.0:
         _sense_cones(x, y, h, ray_offsets, params, walls, near, n_near, raw, rays)
     else:
-        directions = _ray_directions(h, ray_offsets, trig)
+        directions = _ray_directions(h, ray_units, trig)
         _sense_sub_arcs(x, y, ray_offsets, params, walls, near, n_near, raw, rays, directions,
                         ray_cos)  # fmt: skip
     goal2 = goal.reshape(1, 2)
@@ -180,9 +182,10 @@ def sense_one(x: float, y: float, h: float, geometry: tuple, goal: np.ndarray, p
 
 
 @numba.njit(cache=True, inline="always")
-def _ray_directions(h: float, ray_offsets: np.ndarray, trig: np.ndarray) -> np.ndarray:
-    """The row of ``trig`` holding ``cos`` and ``sin`` of every ray at heading ``h``
-    (``cos(h + offset)``, as the reference computes them), filled if not cached."""
+def _ray_directions(h: float, ray_units: np.ndarray, trig: np.ndarray) -> np.ndarray:
+    """The row of ``trig`` holding every ray's unit vector at heading ``h`` (``cos``s,
+    then ``sin``s: ``ray_units`` turned by ``h`` as the reference
+    :func:`~koolio_pymunk.sensing.suite.turned` turns them), filled if not cached."""
     slots = trig.shape[0] - 1
     for k in range(slots):
         if trig[k, 0] == h:
@@ -190,13 +193,16 @@ def _ray_directions(h: float, ray_offsets: np.ndarray, trig: np.ndarray) -> np.n
     k = int(trig[slots, 0])
     trig[slots, 0] = (k + 1) % slots
     row = trig[k]
-    n_sonar, n_sub = ray_offsets.shape
+    n_sonar, n_sub = ray_units.shape[1], ray_units.shape[2]
     n_rays = n_sonar * n_sub
+    ch = math.cos(h)
+    sh = math.sin(h)
     for s in range(n_sonar):
         for i in range(n_sub):
-            angle = h + ray_offsets[s, i]
-            row[1 + s * n_sub + i] = math.cos(angle)
-            row[1 + n_rays + s * n_sub + i] = math.sin(angle)
+            c = ray_units[0, s, i]
+            sn = ray_units[1, s, i]
+            row[1 + s * n_sub + i] = ch * c - sh * sn
+            row[1 + n_rays + s * n_sub + i] = sh * c + ch * sn
     row[0] = h
     return row
 

@@ -259,7 +259,7 @@ def sense_realism(x: float, y: float, h: float, geometry: tuple, goal: np.ndarra
     (or as many scalar draws: the same values): first the readings' uniforms, turned into
     ``noise`` as ``rng.uniform(-1, 1)`` turns them (``-1 + 2 u``), then the realism
     uniforms."""
-    params, camera_dirs, walls = geometry[1], geometry[2], geometry[4]
+    params, camera_dirs, walls = geometry[2], geometry[3], geometry[5]
     raw, rays, eow_k, _, ray_cos, decoy = buffers
     rparams, rflags, neighbours, echo, crossed, missed, misread = realism
     n_sonar = encoding[1]

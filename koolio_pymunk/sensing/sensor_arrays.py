@@ -18,14 +18,15 @@ them once per sensor suite, the fleet once per world.
   report of a reading (:class:`~koolio_pymunk.sensing.realism.SensorRealism`'s layout).
 
 >>> GEOMETRY
-('ray_offsets', 'params', 'camera_dirs', 'markers', 'walls')
+('ray_offsets', 'ray_units', 'params', 'camera_dirs', 'markers', 'walls')
 """
 
 from __future__ import annotations
 
-#: Ray offsets (n_sonar x sub_arcs, radians), ``params`` (see ``ray_kernel.sense_one``),
-#: camera directions (radians), end-of-world markers (n x 2), walls (``wall_array``).
-GEOMETRY = ("ray_offsets", "params", "camera_dirs", "markers", "walls")
+#: Ray offsets (n_sonar x sub_arcs, radians) and their unit vectors (2 x n_sonar x
+#: sub_arcs: ``suite.unit_vectors``), ``params`` (see ``ray_kernel.sense_one``), camera
+#: directions (radians), end-of-world markers (n x 2), walls (``wall_array``).
+GEOMETRY = ("ray_offsets", "ray_units", "params", "camera_dirs", "markers", "walls")
 #: Noise-free readings, ray distances, marker seen per camera, trigonometry cache,
 #: incidence cosine per ray, other plate per camera.
 BUFFERS = ("raw", "rays", "eow_k", "trig", "ray_cos", "decoy")

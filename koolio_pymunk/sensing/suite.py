@@ -22,6 +22,21 @@ noised, then encoded (Tables 6 and 7).
   models act on the noise-free reading before the paper's noise; :class:`Readings`
   records each sub-arc ray's echo and each camera's missed detection or misread plate.
 
+**Ray directions.** A sonar's rays sit at fixed offsets from the heading. Their unit
+vectors are those of the offsets (:func:`unit_vectors`, once per sensor suite) turned by
+the heading (:func:`turned`: two products and a sum per component, plain IEEE arithmetic
+that numpy, Python and the compiled kernel do alike), so a reading takes one ``cos`` and
+one ``sin`` of the heading, not one of each per ray. The compiled kernel repeats
+:func:`turned` operation for operation (``ray_kernel._ray_directions``), so both engines
+cast the same rays bit for bit on any machine (numpy's vectorised ``cos`` need not give
+libm's last bit; the heading's ``cos`` and ``sin`` are taken with :mod:`math` on both
+sides).
+
+>>> units = unit_vectors(np.radians([0.0, 90.0]))
+>>> c, s = turned(math.pi / 2, units)
+>>> np.round(c, 12).tolist(), np.round(s, 12).tolist()
+([0.0, -1.0], [1.0, 0.0])
+
 Sonar groups (paper: 1&2 and 5&6) are averaged before encoding. The state is the tuple
 of codes in keyword order: goal cameras, end-of-world cameras, sonar groups (then the
 compass if ``compass.in_state``).
@@ -127,6 +142,9 @@ class SensorSuite:
         self.n_sonar = len(so.sonar_sensors_deg)
         self.n_camera = len(ca.camera_sensors_deg)
         self.ray_offsets = sonar_ray_offsets(so.sonar_sensors_deg, so.sonar_arc_deg, so.sub_arcs)
+        self.ray_units = unit_vectors(self.ray_offsets)
+        """The rays' offsets as unit vectors, turned by the heading at each reading
+        (:func:`~.ray_engines.turned`)."""
         self.ray_length = so.max_range + self.radius
         self.camera_dirs = np.radians(ca.camera_sensors_deg)
         self.camera_half_arc = math.radians(ca.camera_arc_deg) / 2.0
@@ -254,7 +272,7 @@ class SensorSuite:
             return g
         ray_cos = np.zeros(self.ray_offsets.shape)
         if self.realism.incidence:
-            rays, ray_cos = self.engine.cast_incidence(x, y, h + self.ray_offsets, self.ray_length)
+            rays, ray_cos = self.engine.cast_incidence(x, y, self.ray_dirs(h), self.ray_length)
         else:
             rays = self.cast_sonar(x, y, h)
         sonar = rays.min(axis=1) - self.radius
@@ -360,9 +378,14 @@ class SensorSuite:
             )
 
     # -- geometry -------------------------------------------------------------------
+    def ray_dirs(self, h: float) -> np.ndarray:
+        """Every sub-arc ray's unit vector at heading ``h`` (``[cos, sin]``, each shaped as
+        :attr:`ray_offsets`)."""
+        return turned(h, self.ray_units)
+
     def cast_sonar(self, x: float, y: float, h: float) -> np.ndarray:
         """Centre distance of the first wall along every sub-arc ray (ray length if none)."""
-        return self.engine.cast(x, y, h + self.ray_offsets, self.ray_length)
+        return self.engine.cast(x, y, self.ray_dirs(h), self.ray_length)
 
     def line_of_sight(self, x: float, y: float, target: Point) -> bool:
         """No wall segment between the centre ``(x, y)`` and ``target``."""
@@ -446,6 +469,7 @@ class KernelInputs:
         self.suite = s
         self.n_raw = s.n_sonar + 2 * s.n_camera + 1
         self.ray_offsets = np.ascontiguousarray(s.ray_offsets, dtype=np.float64)
+        self.ray_units = np.ascontiguousarray(s.ray_units, dtype=np.float64)
         cone = 1.0 if s.backend == "cone" else 0.0
         half_sonar = math.radians(s.cfg.sonar.sonar_arc_deg) / 2.0
         self.params = np.array(
@@ -598,6 +622,22 @@ def compass_code(compass: float) -> int:
     from .encoding_kernel import compass_code as kernel
 
     return int(kernel(compass))
+
+
+def unit_vectors(angles: np.ndarray) -> np.ndarray:
+    """``[cos(angles), sin(angles)]`` stacked (shape ``(2, *angles.shape)``): rays along
+    absolute ``angles`` for an engine's ``cast`` (:mod:`~.ray_engines`), or a sonar
+    ring's offsets for :func:`turned`."""
+    a = np.asarray(angles, dtype=np.float64)
+    return np.stack([np.cos(a), np.sin(a)])
+
+
+def turned(heading: float, units: np.ndarray) -> np.ndarray:
+    """The unit vectors ``units`` (:func:`unit_vectors`) turned by ``heading`` radians:
+    ``(c cos h - s sin h, c sin h + s cos h)``, the reference of the compiled kernel's ray
+    directions."""
+    ch, sh = math.cos(heading), math.sin(heading)
+    return np.stack([ch * units[0] - sh * units[1], sh * units[0] + ch * units[1]])
 
 
 def sonar_ray_offsets(angles_deg: Sequence[float], arc_deg: float, sub_arcs: int) -> np.ndarray:

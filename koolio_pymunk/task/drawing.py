@@ -305,12 +305,12 @@ def draw_sonar_rays(
     ranger's range), light grey to full length when it hit nothing."""
     x, y, h = pose
     c = camera.to_screen((x, y))
-    angles = h + suite.ray_offsets
+    dirs = suite.ray_dirs(h)
     dist = readings.rays
-    ex, ey = x + dist * np.cos(angles), y + dist * np.sin(angles)
+    ex, ey = x + dist * dirs[0], y + dist * dirs[1]
     hit = dist < suite.ray_length - 1e-9
     echo = readings.echo if readings.echo.shape == dist.shape else hit
-    for idx in np.ndindex(angles.shape):
+    for idx in np.ndindex(dist.shape):
         end = camera.to_screen((float(ex[idx]), float(ey[idx])))
         if echo[idx]:
             pygame.draw.line(surface, SONAR_LINE, c, end, width=1)

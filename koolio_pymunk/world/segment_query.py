@@ -218,17 +218,19 @@ def all_walls(walls: np.ndarray, active: np.ndarray) -> int:
 
 
 @numba.njit(cache=True)
-def cast(x: float, y: float, angles: np.ndarray, length: float, walls: np.ndarray) -> np.ndarray:
-    """Centre distance of the first wall along each ray (``length`` when none)."""
+def cast(x: float, y: float, dirs: np.ndarray, length: float, walls: np.ndarray) -> np.ndarray:
+    """Centre distance of the first wall along each ray (``length`` when none); ray ``i``
+    points along the unit vector ``(dirs[0][i], dirs[1][i])``."""
     active = np.empty(walls.shape[0], np.int64)
     n = near_walls(x, y, length, walls, active)
-    flat = angles.ravel()
-    out = np.empty(flat.size)
-    for i in range(flat.size):
-        ex = x + length * math.cos(flat[i])
-        ey = y + length * math.sin(flat[i])
+    cs = dirs[0].ravel()
+    sn = dirs[1].ravel()
+    out = np.empty(cs.size)
+    for i in range(cs.size):
+        ex = x + length * cs[i]
+        ey = y + length * sn[i]
         out[i] = first_alpha(x, y, ex - x, ey - y, walls, active, n) * length
-    return out.reshape(angles.shape)
+    return out.reshape(dirs[0].shape)
 
 
 @numba.njit(cache=True)

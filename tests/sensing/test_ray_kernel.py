@@ -14,7 +14,8 @@ from koolio_pymunk.learning.qtable import QTableStore, sensor_signature
 from koolio_pymunk.learning.training import train
 from koolio_pymunk.sensing.agreement import compare_backends, free_poses
 from koolio_pymunk.sensing.ray_engines import FastRays, PymunkRays
-from koolio_pymunk.sensing.suite import SensorSuite
+from koolio_pymunk.sensing.ray_kernel import _ray_directions, new_trig
+from koolio_pymunk.sensing.suite import SensorSuite, sonar_ray_offsets, turned, unit_vectors
 from koolio_pymunk.store.config import Config, SensorConfig
 from koolio_pymunk.task.env import KoolioEnv
 from koolio_pymunk.world.arena import load_arena
@@ -64,6 +65,23 @@ def test_comparison_detects_a_moved_wall() -> None:
     assert raw_f[0] - raw_r[0] == pytest.approx(1e-3, abs=1e-9)
 
 
+def test_ray_directions_are_the_references_bit_for_bit() -> None:
+    """The kernel turns the sonar ring's unit vectors by the heading exactly as
+    ``suite.turned`` does (the same four products and two sums), and the turned vectors
+    are the rays' directions to within 2e-15 (``h + offset`` itself rounds by up to 4e-16)."""
+    offsets = sonar_ray_offsets([0.0, 40.0, -135.0], 55.0, 11)
+    units = unit_vectors(offsets)
+    trig = new_trig(offsets.size)
+    rng = np.random.default_rng(4)
+    for h in np.concatenate([rng.uniform(0.0, 2.0 * math.pi, 500), [0.0, math.pi / 6]]):
+        row = _ray_directions(float(h), units, trig)
+        want = turned(float(h), units)
+        assert np.array_equal(row[1 : 1 + offsets.size], want[0].ravel())
+        assert np.array_equal(row[1 + offsets.size :], want[1].ravel())
+        assert np.allclose(want[0], np.cos(h + offsets), rtol=0.0, atol=2e-15)
+        assert np.allclose(want[1], np.sin(h + offsets), rtol=0.0, atol=2e-15)
+
+
 def test_engines_cast_and_line_of_sight_agree() -> None:
     """The engine API (cast, line_of_sight) of both engines on hand-picked rays."""
     box = [((0, 0), (100, 0)), ((100, 0), (100, 80)), ((100, 80), (0, 80)), ((0, 80), (0, 0))]
@@ -71,11 +89,11 @@ def test_engines_cast_and_line_of_sight_agree() -> None:
     pillar = [(corners[i], corners[(i + 1) % 4]) for i in range(4)]
     world = World(box + pillar, 10.0)
     ref, fast = PymunkRays(world), FastRays(world)
-    angles = np.linspace(0.0, 2.0 * math.pi, 37)
-    want = ref.cast(20.0, 40.0, angles, 250.0)
-    assert np.array_equal(fast.cast(20.0, 40.0, angles, 250.0), want)
+    dirs = unit_vectors(np.linspace(0.0, 2.0 * math.pi, 37))
+    want = ref.cast(20.0, 40.0, dirs, 250.0)
+    assert np.array_equal(fast.cast(20.0, 40.0, dirs, 250.0), want)
     assert want[0] == pytest.approx(20.0)  # straight into the pillar's west face at x = 40
-    assert np.array_equal(fast.cast(20.0, 40.0, angles, 10.0), ref.cast(20.0, 40.0, angles, 10.0))
+    assert np.array_equal(fast.cast(20.0, 40.0, dirs, 10.0), ref.cast(20.0, 40.0, dirs, 10.0))
     for target, seen in (((90.0, 40.0), False), ((30.0, 75.0), True), ((20.0, 5.0), True)):
         assert ref.line_of_sight(20.0, 40.0, *target) is seen
         assert fast.line_of_sight(20.0, 40.0, *target) is seen
@@ -144,7 +162,8 @@ def test_cone_model_is_the_limit_of_dense_rays() -> None:
         s = sub.raw(x, y, h)[0][: sub.n_sonar]
         assert (c <= s + 1e-9).all()
         for k, deg in enumerate(cfg.sonar.sonar_sensors_deg):
-            dense = rays.cast(x, y, h + math.radians(deg) + fan, cone.ray_length).min()
+            dirs = unit_vectors(h + math.radians(deg) + fan)
+            dense = rays.cast(x, y, dirs, cone.ray_length).min()
             want = 10_000.0 if dense > cone.ray_length - 1e-9 else dense - 10.0
             assert c[k] <= want + 1e-9
             assert c[k] == pytest.approx(want, abs=0.05)
