@@ -22,6 +22,7 @@ table learned on the robot can be evaluated or viewed with the other commands.
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import os
 from pathlib import Path
@@ -76,7 +77,8 @@ def run(args: argparse.Namespace) -> int:
     table = load_any_table(args.qtable)
     out = check_path(args.out, "--out")
     if out.suffix == ".qtable":  # a table: not while a run writes it
-        with FileLock(out, "koolio-pm export"):
+        with FileLock(out, WRITTEN_BY):
+            check_replaceable(out, "table")
             atomic_write(out, table.to_bytes())
         print(f"wrote {out}: {len(table)} states, {table.meta.get('episodes', 0)} episodes")
         return 0
@@ -84,7 +86,9 @@ def run(args: argparse.Namespace) -> int:
     doc = policy_document(table, cfg, episode=args.episode, source=args.qtable)
     if args.world is not None:
         doc["world"] = str(args.world)
-    write_policy(doc, out)
+    with FileLock(out, WRITTEN_BY):
+        check_replaceable(out, "policy")
+        write_policy(doc, out)
     lay = doc["layout"]
     print(
         f"wrote {out}: {rt.FORMAT} v{rt.VERSION}, {doc['n_states']} states, "
@@ -92,6 +96,44 @@ def run(args: argparse.Namespace) -> int:
         f"{doc['episodes']} episodes, {out.stat().st_size:,} bytes"
     )
     return 0
+
+
+def check_replaceable(out: Path, kind: str) -> None:
+    """Refuse to replace an existing ``out`` that is not a file of ``kind`` (``"table"``: a
+    ``.qtable`` file; ``"policy"``: a koolio-policy file): ``--out`` replaces an earlier
+    export, never a log, a configuration or anyone's document (FileError, one line).
+
+    >>> import tempfile
+    >>> notes = Path(tempfile.mkdtemp()) / "notes.json"
+    >>> _ = notes.write_text('{"todo": 1}')
+    >>> check_replaceable(notes, "policy")
+    Traceback (most recent call last):
+    koolio_pymunk.store.errors.FileError: .../notes.json: --out: exists and is not a koolio-po...
+    """
+    try:
+        os.stat(out)
+    except OSError:  # missing (a new file), or the write itself says why
+        return
+    table = kind == "table"
+    want = "a .qtable file" if table else f"a {rt.FORMAT} file"
+    try:
+        data = read_bytes(out, MAX_TABLE_BYTES if table else rt.MAX_POLICY_BYTES, want)
+    except FileError:  # unreadable, too large, not a regular file: not ours to replace
+        data = b""
+    if not (data[: len(MAGIC)] == MAGIC if table else _is_policy(data)):
+        problem = f"exists and is not {want}: choose another name or remove it"
+        raise FileError(located(str(out), "--out", problem))
+
+
+def _is_policy(data: bytes) -> bool:
+    """``data`` is a JSON object whose ``format`` is the policy format."""
+    if data.lstrip()[:1] != b"{":
+        return False
+    try:
+        doc = json.loads(data)
+    except ValueError:  # not JSON, or not UTF-8
+        return False
+    return isinstance(doc, dict) and doc.get("format") == rt.FORMAT
 
 
 def policy_document(

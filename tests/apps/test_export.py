@@ -6,6 +6,7 @@ import json
 
 import numpy as np
 import pytest
+from inputs import expect_error
 
 from koolio_pymunk import robot_runtime as rt
 from koolio_pymunk.apps import cli
@@ -20,6 +21,7 @@ from koolio_pymunk.learning.qtable import (
 from koolio_pymunk.learning.training import train
 from koolio_pymunk.store.config import load_config
 from koolio_pymunk.store.errors import QTableError
+from koolio_pymunk.store.locks import FileLock
 from koolio_pymunk.task.env import KoolioEnv
 
 
@@ -217,3 +219,28 @@ def test_non_table_files_are_refused(tmp_path, capsys):
     code = cli.main(["export", "--qtable", str(tmp_path / "missing"), "--out", "x.json"])
     assert code == 2
     assert "missing: cannot read" in capsys.readouterr().err
+
+
+def test_out_replaces_only_a_file_of_its_kind(trained, tmp_path, capsys):
+    """``--out`` replaces an earlier export (policy or table), never another file, and
+    never one a running command holds (a training run's log: newcomer audit)."""
+    _, _, path = trained
+    work = tmp_path / "w"
+    work.mkdir()
+    log = work / "run.csv"
+    log.write_text("episode,steps,outcome\n0,12,goal\n")
+    notes = work / "notes.json"
+    notes.write_text('{"todo": ["calibrate the sonar"]}')
+    table_like = work / "other.qtable"
+    table_like.write_text("not a table")
+    export = ["export", "--qtable", str(path), "--out"]
+    expect_error(capsys, work, [*export, str(log)], "run.csv: --out: exists and is not a")
+    expect_error(capsys, work, [*export, str(notes)], "notes.json: --out: exists and is not a")
+    expect_error(capsys, work, [*export, str(table_like)], "other.qtable: --out: exists and")
+    pol, back = work / "p.json", work / "b.qtable"
+    for _ in range(2):  # an earlier export of each kind is replaced
+        assert cli.main([*export, str(pol)]) == 0
+        assert cli.main(["export", "--qtable", str(pol), "--out", str(back)]) == 0
+    capsys.readouterr()
+    with FileLock(pol, "koolio-pm train"):  # in use: refused, left as it was
+        expect_error(capsys, work, [*export, str(pol)], "p.json: in use by process")
