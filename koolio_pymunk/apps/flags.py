@@ -12,6 +12,9 @@ from __future__ import annotations
 import argparse
 import re
 from collections.abc import Callable
+from pathlib import Path
+
+from ..store.errors import KoolioError
 
 #: Seeds are below 2**63 (numpy's generators and the int64 of the tables' files).
 SEED_LIMIT = 1 << 63
@@ -99,3 +102,17 @@ def _num(value: int) -> str:
 def episodes_type(low: int = 0) -> Callable[[str], int]:
     """``--episodes``: an integer in ``low``..:data:`MAX_EPISODES`."""
     return int_type(low, MAX_EPISODES)
+
+
+def check_png(path: str | Path, item: str) -> None:
+    """An image to write (``--screenshot``, ``plot --out``): a name ending in ``.png``
+    that is not a folder; else :class:`KoolioError` (one line naming ``item``).
+
+    >>> check_png("notes.md", "--screenshot")
+    Traceback (most recent call last):
+    koolio_pymunk.store.errors.KoolioError: --screenshot: notes.md: must end in .png
+    """
+    if not str(path).lower().endswith(".png"):
+        raise KoolioError(f"{item}: {path}: must end in .png")
+    if Path(path).is_dir():
+        raise KoolioError(f"{item}: {path}: is a folder, not a file")

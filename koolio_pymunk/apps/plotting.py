@@ -505,13 +505,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """``koolio-pm plot``."""
     from .cli import DEFAULT_LOG
+    from .flags import check_png
 
     if args.window < 1:
         raise KoolioError(f"--window: must be >= 1, got {args.window}")
-    if not str(args.out).lower().endswith(".png"):
-        raise KoolioError(f"--out: {args.out}: must end in .png")
-    if Path(args.out).is_dir():
-        raise KoolioError(f"--out: {args.out}: is a folder, not a file")
+    check_png(args.out, "--out")
     paths = [*args.logs, *(args.log or [])] or [DEFAULT_LOG]
     logs = [read_log(p) for p in paths]
     attach_evals(logs, args.evals)

@@ -26,6 +26,7 @@ from ...store.config import Config
 from ...store.errors import KoolioError
 from ...store.files import atomic_write, check_path
 from ...world.arena import Point
+from ..flags import check_png
 from . import dialogs, items, limits, view
 from .camera import EditorCamera
 from .dialogs import Prompt
@@ -149,7 +150,8 @@ class EditorApp:
         view.draw_frame(self)
 
     def screenshot(self, path: str | FilePath) -> None:
-        """Draw and save the window as an image, atomically."""
+        """Draw and save the window as a PNG image, atomically."""
+        check_png(path, "screenshot")
         self.render()
         path = check_path(path, "--screenshot")
         buf = io.BytesIO()

@@ -17,6 +17,7 @@ import pygame
 
 from ...store.config import ROBOT_PROFILES, load_config
 from ...store.errors import KoolioError
+from ..flags import check_png
 from . import limits
 from .app import EditorApp
 from .model import EditorModel
@@ -78,6 +79,8 @@ def run_editor(args: argparse.Namespace) -> int:
     (:mod:`~koolio_pymunk.apps.editor.command`); bad input raises :class:`KoolioError`."""
     try:
         size = window_size(args.size)
+        if args.screenshot:
+            check_png(args.screenshot, "--screenshot")
         model = make_model(args)
         config = load_config(args.config) if args.config else None
         app = EditorApp(model, size, config)

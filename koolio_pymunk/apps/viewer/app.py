@@ -35,6 +35,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ...store.errors import KoolioError
+from ..flags import check_png
 
 if TYPE_CHECKING:
     from .hud import Style
@@ -191,10 +192,8 @@ def _check_args(args: argparse.Namespace) -> tuple[int, Path] | None:
         raise KoolioError(f"--episodes: must be >= 0, got {args.episodes}")
     if args.steps is not None and args.steps < 0:
         raise KoolioError(f"--steps: must be >= 0, got {args.steps}")
-    if args.screenshot is not None and not args.screenshot.lower().endswith(".png"):
-        raise KoolioError(f"--screenshot: {args.screenshot}: must end in .png")
-    if args.screenshot is not None and Path(args.screenshot).is_dir():
-        raise KoolioError(f"--screenshot: {args.screenshot}: is a folder, not a file")
+    if args.screenshot is not None:
+        check_png(args.screenshot, "--screenshot")
     if args.screenshot_every is None:
         return None
     k_text, folder = args.screenshot_every

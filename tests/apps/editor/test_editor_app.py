@@ -398,3 +398,22 @@ def test_edge_lengths_keep_clear_of_the_door_labels(size: tuple[int, int], view_
     for r in lengths:
         assert r.collidelist(doors) < 0, (r, doors[r.collidelist(doors)])
         assert r.collidelist([q for q in lengths if q is not r]) < 0
+
+
+def test_a_screenshot_is_a_png_or_refused(tmp_path: Path) -> None:
+    """``--screenshot`` and the script's ``screenshot`` write only ``.png`` names (they
+    replaced any file with an image: newcomer audit), as ``view`` and ``plot`` do."""
+    victim = tmp_path / "notes.md"
+    victim.write_text("keep me\n")
+    env = {**os.environ, "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy"}
+    tool = str(REPO / "tools" / "arena_editor.py")
+    result = subprocess.run(
+        [sys.executable, tool, "arenas/room.yaml", "--screenshot", str(victim)],
+        capture_output=True, text=True, env=env, check=False, cwd=REPO,
+    )  # fmt: skip
+    assert result.returncode == 2
+    assert result.stderr == f"koolio-pm: error: --screenshot: {victim}: must end in .png\n"
+    assert victim.read_text() == "keep me\n"
+    with pytest.raises(ScriptError, match=r"screenshot: .*notes\.md: must end in \.png$"):
+        run_lines(app_for(), f"screenshot {victim}\n")
+    assert victim.read_text() == "keep me\n"
