@@ -9,7 +9,8 @@ writes after an interrupt outside a guard (the window's last save) runs under
 :func:`deferred`.
 
 SIGTERM (``kill``, a job scheduler's stop) is taken the same way while a guard is active:
-the run stops at its next safe point, saves and exits, as on Ctrl-C.
+the run stops at its next safe point, saves and exits, as on Ctrl-C; also when SIGINT is
+ignored (a background job of a script) or someone else's.
 
 Only the first of two quick Ctrl-Cs counts: a second one interrupts at once only when the
 first has waited :data:`GRACE_SECONDS` without being taken (a step that does not end),
@@ -130,17 +131,20 @@ class SafeInterrupt:
             if _replaceable(self._previous):  # only Python's own, or the command line's
                 signal.signal(signal.SIGINT, self._handle)
                 self._installed = True
-                self._previous_term = signal.getsignal(signal.SIGTERM)
-                if self._previous_term is signal.SIG_DFL:  # a stop request: the same path
-                    signal.signal(signal.SIGTERM, self._handle)
+            # A stop request takes the same path, whoever handles SIGINT: a job started in
+            # the background of a script has SIGINT ignored, and `kill` must still save.
+            self._previous_term = signal.getsignal(signal.SIGTERM)
+            if self._previous_term is signal.SIG_DFL:
+                signal.signal(signal.SIGTERM, self._handle)
         return self
 
     def __exit__(self, *exc: object) -> None:
         if self._installed:
             signal.signal(signal.SIGINT, self._previous)
-            if self._previous_term is signal.SIG_DFL:
-                signal.signal(signal.SIGTERM, signal.SIG_DFL)
             self._installed = False
+        if self._previous_term is signal.SIG_DFL:
+            signal.signal(signal.SIGTERM, signal.SIG_DFL)
+            self._previous_term = None
 
 
 @contextlib.contextmanager

@@ -152,3 +152,37 @@ def test_terminate_as_interrupt_raises_keyboard_interrupt_and_restores() -> None
         assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
     finally:
         signal.signal(signal.SIGTERM, previous)
+
+
+def _ignore_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def test_sigterm_saves_a_background_job_that_ignores_ctrl_c(tmp_path):
+    """A job started with ``&`` from a script inherits SIGINT ignored; ``kill`` must still
+    stop it at a safe point with the table saved (it ended by the signal, the table at 0
+    episodes and the log ahead of it: newcomer audit)."""
+    (tmp_path / "tiny.yaml").write_text("episode: {max_steps: 60}\n")
+    argv = [sys.executable, "-m", "koolio_pymunk", "train", "--arena", "room"]
+    argv += ["--config", "tiny.yaml", "--qtable", "q.qtable", "--log", "q.csv"]
+    argv += ["--episodes", "100000", "--save-every", "100000"]
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    p = subprocess.Popen(
+        argv, cwd=tmp_path, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+        preexec_fn=_ignore_sigint,
+    )  # fmt: skip
+    try:
+        deadline = time.time() + 120
+        log = tmp_path / "q.csv"
+        while time.time() < deadline and not (log.exists() and log.stat().st_size > 200):
+            time.sleep(0.02)
+        assert p.poll() is None, p.communicate()[1]
+        p.send_signal(signal.SIGTERM)
+        err = p.communicate(timeout=120)[1].decode()
+    finally:
+        if p.poll() is None:
+            p.kill()
+    assert p.returncode == 130, err
+    assert "Traceback" not in err and len(err.strip().splitlines()) <= 1, err
+    assert load_qtable(tmp_path / "q.qtable").meta["episodes"] > 0
+    _in_step(tmp_path)
