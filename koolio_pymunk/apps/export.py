@@ -25,6 +25,7 @@ import argparse
 import json
 import math
 import os
+import stat
 from pathlib import Path
 from typing import Any
 
@@ -76,6 +77,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     table = load_any_table(args.qtable)
     out = check_path(args.out, "--out")
+    if out.is_dir():  # before its lock file's name is made from it
+        raise FileError(located(str(out), "", "cannot write: is a folder, not a file"))
     if out.suffix == ".qtable":  # a table: not while a run writes it
         with FileLock(out, WRITTEN_BY):
             check_replaceable(out, "table")
@@ -111,7 +114,8 @@ def check_replaceable(out: Path, kind: str) -> None:
     koolio_pymunk.store.errors.FileError: .../notes.json: --out: exists and is not a koolio-po...
     """
     try:
-        os.stat(out)
+        if not stat.S_ISREG(os.stat(out).st_mode):
+            return  # a FIFO, a device...: the write refuses it and says what it is
     except OSError:  # missing (a new file), or the write itself says why
         return
     table = kind == "table"

@@ -387,6 +387,11 @@ class QTableStore:
             self.create(table)
         return table
 
+    @property
+    def locked(self) -> bool:
+        """This store holds its table's lock (from :meth:`lock` to :meth:`close`)."""
+        return self._lock.held
+
     def lock(self) -> None:
         """Take the table's lock (:class:`~koolio_pymunk.store.errors.InUseError` if another
         process writes it) and remove what interrupted writes of it left behind."""

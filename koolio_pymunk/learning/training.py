@@ -37,6 +37,7 @@ from ..store.episode_log import LOG_FIELDS as LOG_FIELDS  # the log's columns, r
 from ..store.episode_log import LogWriter, check_log_path, log_rows
 from ..store.errors import KoolioError, located
 from ..store.interrupts import SafeInterrupt
+from ..store.locks import check_lock_file
 from ..task.env import KoolioEnv
 from ..world.arena import arena_path, arena_record, load_arena
 from .algorithms import attach, make_learner
@@ -247,6 +248,8 @@ class RunFiles:
         a new table's log without rows of another run. Returns the table a run would
         resume (None: a new one)."""
         logged = log_path is not None and str(log_path) != ""
+        if not store.locked:  # in use by another: that, before a line about the table
+            check_lock_file(store.path)
         if logged:
             check_log_path(log_path, store.path, tuple(env.randomizer.columns))
         table = store.peek()

@@ -248,8 +248,9 @@ def _check_note(fd: int, target: Path, path: Path) -> None:
 
 def check_lock_file(target: str | Path, path: Path | None = None) -> None:
     """Refuse, before anything is read or written, a lock file of ``target`` that could
-    not be taken (module doc: a link, a special file, a hard link, other data); a
-    missing or unreachable one is left to :meth:`FileLock.acquire`."""
+    not be taken (module doc: a link, a special file, a hard link, other data) or that
+    another process holds now (:class:`InUseError`, as :meth:`FileLock.acquire` would
+    say it later); a missing or unreachable one is left to :meth:`FileLock.acquire`."""
     target = Path(target)
     path = path if path is not None else lock_path(target)
     if os.path.islink(path):
@@ -263,8 +264,27 @@ def check_lock_file(target: str | Path, path: Path | None = None) -> None:
     try:
         _check_opened(fd, target, path)
         _check_note(fd, target, path)
+        _check_free(fd, target, path)
     finally:
         os.close(fd)
+
+
+def _check_free(fd: int, target: Path, path: Path) -> None:
+    """Nobody holds the lock of ``fd`` now (taken and given back at once)."""
+    try:
+        free = _try_lock(fd)
+    except OSError:  # a file system without locks: as FileLock.acquire, go on
+        return
+    if not free:
+        raise InUseError(
+            located(
+                str(target),
+                "",
+                f"in use by {_read_note(fd)}; wait for it to finish or stop it (lock file {path})",
+            )
+        )
+    with contextlib.suppress(OSError):
+        _unlock(fd)
 
 
 def _write_note(fd: int, note: str) -> None:

@@ -255,3 +255,19 @@ def test_closed_output_pipe_is_not_an_error() -> None:
         timeout=60,
     )
     assert p.stdout == "State spac" and p.stderr == ""
+
+
+def test_a_table_in_use_is_the_only_line_train_prints(tmp_path, capsys):
+    """A second ``train`` on a table another run holds says so and nothing else (it
+    printed ``resuming ...`` first: newcomer audit)."""
+    from koolio_pymunk.store.locks import FileLock
+
+    table = tmp_path / "t.qtable"
+    argv = ["train", "--arena", "room", "--episodes", "2", "--qtable", str(table)]
+    assert main([*argv, "--quiet"]) == 0
+    capsys.readouterr()
+    with FileLock(table, "koolio-pm train"):
+        assert main([*argv[:-3], "4", "--qtable", str(table)]) == 2
+    out, err = capsys.readouterr()
+    assert out == ""
+    assert err.count("\n") == 1 and "t.qtable: in use by process" in err
