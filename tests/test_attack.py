@@ -629,12 +629,12 @@ def test_a_5000_point_polygon_is_checked(work, capsys):
 @pytest.mark.parametrize(
     ("argv", "words"),
     [
-        (["train", "--seed", "-1"], ["argument --seed: must be >= 0, got -1"]),
-        (["eval", "--seed", "x"], ["argument --seed: not an integer: 'x'"]),
-        (["train", "--episodes", "lots"], ["argument --episodes: invalid int value"]),
+        (["train", "--seed", "-1"], ["--seed: must be >= 0, got -1"]),
+        (["eval", "--seed", "x"], ["--seed: not an integer: 'x'"]),
+        (["train", "--episodes", "lots"], ["--episodes: not an integer"]),
         (["train", "--robots", "100000"], ["--robots: must be in 1..1024"]),
         (["train", "--bogus"], ["unrecognized arguments: --bogus"]),
-        (["nonsense"], ["argument command: invalid choice: 'nonsense'"]),
+        (["nonsense"], ["command: invalid choice: 'nonsense'"]),
         (["view", "--size", "100000x100000"], ["is larger than 7680x4320"]),
         (["view", "--size", "big"], ["expected WIDTHxHEIGHT"]),
         (["export"], ["the following arguments are required: --out"]),

@@ -442,7 +442,7 @@ BAD_FLAGS: dict[str, tuple[list[str], str]] = {
         ["view", "--screenshot-every", "-1", "frames", "--steps", "1"],
         "K must be >= 1",
     ),
-    "view --speed nan": (["view", "--speed", "nan", "--steps", "1"], "argument --speed"),
+    "view --speed nan": (["view", "--speed", "nan", "--steps", "1"], "--speed"),
 }
 
 
@@ -454,7 +454,7 @@ def test_bad_value_flag(here: Path, capsys, case: str) -> None:
 
 
 def test_argparse_errors_name_the_subcommand(here: Path, capsys) -> None:
-    line = expect_error(capsys, here, ["train", "--robots"], "argument --robots")
+    line = expect_error(capsys, here, ["train", "--robots"], "--robots")
     assert line.endswith("(see koolio-pm train --help)")
 
 

@@ -58,7 +58,9 @@ class _Parser(argparse.ArgumentParser):
     def error(self, message: str) -> NoReturn:
         sub = self.prog.removeprefix("koolio-pm").strip()
         where = f" (see koolio-pm {sub} --help)" if sub else " (see koolio-pm --help)"
-        self.exit(2, f"koolio-pm: error: {' '.join(message.split())}{where}\n")
+        # "--seed: ..." as every other error names its item (argparse: "argument --seed:")
+        message = " ".join(message.split()).removeprefix("argument ")
+        self.exit(2, f"koolio-pm: error: {message}{where}\n")
 
     def parse_args(self, args=None, namespace=None):  # type: ignore[override]
         """As argparse's, with a did-you-mean on unknown flags, from the parser of the
@@ -254,7 +256,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.set_defaults(files_follow_arena=True)
     p.add_argument(
-        "--episodes", type=episodes_type(), default=100, help="episodes per goal (default 100)"
+        "--episodes",
+        type=episodes_type(1),
+        default=100,
+        help="episodes per goal, at least 1 (default 100)",
     )
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
     p.add_argument(

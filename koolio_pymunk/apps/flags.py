@@ -1,6 +1,6 @@
 """The types of the command line's number flags: each value is checked where argparse
 reads it, and a bad one is one line naming the flag and its range
-(``koolio-pm: error: argument --seed: must be >= 0, got -1 (see koolio-pm train --help)``).
+(``koolio-pm: error: --seed: must be >= 0, got -1 (see koolio-pm train --help)``).
 
 Integers are written in ASCII digits (``int`` alone takes ``1_0`` and ``٣``); floats must
 be finite (``nan`` and ``inf`` are refused by every range). The ranges of every flag are
@@ -60,7 +60,10 @@ def int_type(low: int, high: int) -> Callable[[str], int]:
     """
 
     def parse(text: str) -> int:
-        value = _parse_int(text)
+        try:
+            value = _parse_int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not an integer: {text[:40]!r}") from None
         if not low <= value <= high:
             raise argparse.ArgumentTypeError(
                 f"must be in {_num(low)}..{_num(high)}, got {_num(value)}"

@@ -123,7 +123,7 @@ def test_check_arena_ok_and_bad(tmp_path) -> None:
 
 
 def test_bad_flags_and_bad_files_are_one_line_exit_2(tmp_path) -> None:
-    one_line_error(cli("train", "--episodes", "many"), "--episodes", "invalid int")
+    one_line_error(cli("train", "--episodes", "many"), "--episodes", "not an integer")
     one_line_error(cli("train", "--frobnicate"), "unrecognized arguments")
     one_line_error(cli("train", "--episodes", "-1", "--qtable", str(tmp_path / "q")), "--episodes")
     corrupt = tmp_path / "c.qtable"
