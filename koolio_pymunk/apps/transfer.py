@@ -805,7 +805,8 @@ def run(args: argparse.Namespace) -> int:
     if say is not None:
         say("koolio-pm transfer")
         for f in fields(cfg):
-            say(f"  {f.name}: {_plain(getattr(cfg, f.name))}")
+            value = _plain(getattr(cfg, f.name))
+            say(f"  {f.name}: {'(default)' if value is None else value}")
         say(f"  out: {out}")
     result = run_transfer(cfg, out, say).as_dict()
     for line in table_lines(result):

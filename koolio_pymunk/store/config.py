@@ -347,27 +347,51 @@ def profile_names() -> list[str]:
     return sorted(p.stem for p in PROFILE_DIR.glob("*.yaml"))
 
 
-def config_path(name: str | Path) -> Path:
-    """The file of a profile name, or ``name`` itself when it looks like a path.
+def world_names() -> list[str]:
+    """Names of the shipped profiles that are worlds (set only :data:`WORLD_SECTIONS`).
+
+    >>> world_names()
+    ['koolio-real', 'koolio-real-dr']
+    """
+    out = []
+    for name in profile_names():
+        data = read_yaml(PROFILE_DIR / f"{name}.yaml", name, ConfigError, MAX_CONFIG_BYTES)
+        if isinstance(data, dict) and all(
+            _outside_world(str(k), v) is None for k, v in data.items()
+        ):
+            out.append(name)
+    return out
+
+
+def config_path(name: str | Path, flag: str = "--config") -> Path:
+    """The file of a profile name, or ``name`` itself when it looks like a path; a name
+    that is neither is one line naming ``flag`` and the profiles it takes.
 
     >>> config_path("paper").name, str(config_path("my.yaml"))
     ('paper.yaml', 'my.yaml')
+    >>> config_path("koolio-rea", "--world")
+    Traceback (most recent call last):
+    koolio_pymunk.store.errors.ConfigError: --world: koolio-rea: no such world profile (did you...
     """
     text = str(name)
     if isinstance(name, Path) or text.lower().endswith((".yaml", ".yml")) or "/" in text:
         return Path(name)
     candidate = PROFILE_DIR / f"{text}.yaml"
-    if candidate.is_file():
+    world = flag == "--world"
+    names = world_names() if world else profile_names()
+    if candidate.is_file() and text in names:
         return candidate
-    names = profile_names()
+    if candidate.is_file():  # a configuration profile given as a world
+        raise ConfigError(
+            f"--world: {text}: a configuration profile, not a world: give it as --config "
+            f"{text} (worlds: {', '.join(names)})"
+        )
     close = difflib.get_close_matches(text, names, n=1)
     hint = f" (did you mean '{close[0]}'?)" if close else ""
+    what, listed = ("world profile", "worlds") if world else ("profile", "profiles")
     raise ConfigError(
-        located(
-            text,
-            "",
-            f"no such profile{hint} (profiles: {', '.join(names)}; a file name ends in .yaml)",
-        )
+        f"{flag}: {text}: no such {what}{hint} ({listed}: {', '.join(names)}; "
+        "a file name ends in .yaml)"
     )
 
 
@@ -375,9 +399,10 @@ def config_path(name: str | Path) -> Path:
 MAX_CONFIG_BYTES = 256 * 1024
 
 
-def read_config_file(path: str | Path) -> tuple[dict, str]:
-    """The mapping in a configuration file or profile, and the name to report it by."""
-    file = config_path(path)
+def read_config_file(path: str | Path, flag: str = "--config") -> tuple[dict, str]:
+    """The mapping in a configuration file or profile (``flag``: ``--config`` or
+    ``--world``), and the name to report it by."""
+    file = config_path(path, flag)
     source = str(path)
     data = read_yaml(file, source, ConfigError, MAX_CONFIG_BYTES, "configuration file")
     return ({} if data is None else data), source
@@ -407,7 +432,7 @@ def apply_world(cfg: Config, world: str | Path) -> Config:
     Only :data:`WORLD_SECTIONS` may appear in a world; anything else is refused, since it
     would change the robot (its sensors' layout, its learner or rewards), not its world.
     """
-    data, source = read_config_file(world)
+    data, source = read_config_file(world, "--world")
     if not isinstance(data, dict):
         raise ConfigError(located(source, "(top level)", "must be a mapping"))
     allowed = ", ".join(

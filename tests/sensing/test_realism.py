@@ -507,8 +507,8 @@ def test_unknown_world_profile_is_one_line_exit_2(capsys) -> None:
     assert main(["eval", "--world", "koolio-rael", "--qtable", "none.qtable"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [
-        "koolio-pm: error: koolio-rael: no such profile (did you mean 'koolio-real'?) "
-        "(profiles: koolio-real, koolio-real-dr, paper, paper-memory; a file name ends in .yaml)"
+        "koolio-pm: error: --world: koolio-rael: no such world profile (did you mean "
+        "'koolio-real'?) (worlds: koolio-real, koolio-real-dr; a file name ends in .yaml)"
     ]
     with pytest.raises(ConfigError):
         load_config(world="koolio-rael")

@@ -37,7 +37,9 @@ def test_paper_memory_profile_is_the_paper_plus_memory() -> None:
 
 
 def test_unknown_profile_is_one_line_error() -> None:
-    with pytest.raises(ConfigError, match=r"^papr: no such profile \(did you mean 'paper'\?\)"):
+    with pytest.raises(
+        ConfigError, match=r"^--config: papr: no such profile \(did you mean 'paper'\?\)"
+    ):
         load_config("papr")
 
 
@@ -52,7 +54,7 @@ def test_world_sets_only_world_sections(tmp_path) -> None:
     world.write_text("sensors: {sonar: {max_range: 100}}\n")
     with pytest.raises(ConfigError, match=r"w\.yaml: sensors\.sonar: not a world setting"):
         apply_world(Config(), world)
-    with pytest.raises(ConfigError, match=r"paper: sensors\.camera: not a world setting"):
+    with pytest.raises(ConfigError, match=r"^--world: paper: a configuration profile, not a w"):
         apply_world(Config(), "paper")
 
 
