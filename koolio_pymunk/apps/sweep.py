@@ -512,12 +512,13 @@ def run_one(task: dict[str, Any]) -> dict[str, Any]:
     from ..learning.training import evaluate, train
     from ..store.config import config_from_dict
     from ..store.files import read_bytes
+    from ..store.worlds import world_name
     from ..task.env import KoolioEnv
 
     cfg = config_from_dict(task["config"], task["run_id"])
     env = KoolioEnv(arena=task["arena_obj"], config=cfg, goal=task["goal"])
     if task.get("world") is not None:  # its realism is in cfg; the table records its name
-        env.world_name = str(task["world"])
+        env.world_name = world_name(cfg, task["world"])
     seed = int(task["seed"])
     episodes, every = int(task["episodes"]), int(task["eval_every"])
     checkpoints: list[dict[str, Any]] = []

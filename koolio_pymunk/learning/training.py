@@ -37,6 +37,7 @@ from ..store.episode_log import LOG_FIELDS as LOG_FIELDS  # the log's columns, r
 from ..store.episode_log import LogWriter, check_log_path, log_rows
 from ..store.errors import KoolioError, located
 from ..store.interrupts import SafeInterrupt
+from ..store.worlds import world_label as world_label  # how a table names a world
 from ..task.env import KoolioEnv
 from ..world.arena import arena_path, arena_record, load_arena
 from .algorithms import attach, make_learner
@@ -106,25 +107,13 @@ class Progress:
         )
 
 
-def world_label(world: str | Path | None) -> str:
-    """How a table records the world ``--world`` named: a profile's name, a world file's
-    name without its folders (two spellings of one path agree), ``ideal`` for none.
-
-    >>> world_label(None), world_label("koolio-real"), world_label("worlds/lab.yaml")
-    ('ideal', 'koolio-real', 'lab.yaml')
-    """
-    if world is None or str(world) == "ideal":
-        return "ideal"
-    text = str(world)
-    return Path(text).name if text.endswith((".yaml", ".yml")) or "/" in text else text
-
-
 def run_record(env: KoolioEnv) -> dict[str, str]:
     """What a table records of a run in ``env`` besides the arena
     (:func:`~koolio_pymunk.learning.qtable.check_record`): ``goal`` when it is not the
     arena file's active goal (``random`` or another door), ``world`` when it is not the
-    ideal one. Empty for a default run, whose table bytes therefore stay those of tables
-    written before these keys existed."""
+    ideal one (:attr:`~koolio_pymunk.task.env.KoolioEnv.world_name`: from ``--world`` or
+    from a configuration whose realism is on). Empty for a default run, whose table bytes
+    therefore stay those of tables written before these keys existed."""
     out: dict[str, str] = {}
     goal = "random" if env.random_goal else env.goal_name
     if goal != arena_goal(env):

@@ -112,6 +112,29 @@ def test_a_run_in_another_world_records_it_in_its_table(tmp_path):
     assert {load_qtable(t).meta.get("world") for t in tables} == {"koolio-real"}
 
 
+def test_a_run_whose_configuration_turns_realism_on_records_its_world(tmp_path):
+    """``config: koolio-real`` is the world koolio-real, as ``--world`` is; realism swept
+    in the grid is named by its content, one world per value."""
+    from koolio_pymunk.learning.qtable import load_qtable
+
+    text = SPEC.replace("seeds: [0, 1]", "seeds: [0]").replace(
+        "learner.alpha: [0.1, 0.5]", "realism.motion.drift_deg: [0.0, 1.0]"
+    )
+    spec = load_spec_text(tmp_path, text + "config: koolio-real\n")
+    run_sweep(spec, tmp_path / "out", workers=1, plot=False, report=None)
+    worlds = {t.parent.parent.name.split("-")[0]: load_qtable(t).meta.get("world")
+              for t in (tmp_path / "out").glob("runs/*/*/qtable.qtable")}  # fmt: skip
+    assert worlds["drift_deg=0.0"].startswith("realism-")  # koolio-real without its drift
+    assert worlds["drift_deg=1.0"].startswith("realism-")
+    assert len(set(worlds.values())) == 2
+    spec = load_spec_text(
+        tmp_path, SPEC.replace("seeds: [0, 1]", "seeds: [0]") + "config: koolio-real\n"
+    )
+    run_sweep(spec, tmp_path / "real", workers=1, plot=False, report=None)
+    tables = sorted((tmp_path / "real").glob("runs/*/*/qtable.qtable"))
+    assert {load_qtable(t).meta.get("world") for t in tables} == {"koolio-real"}
+
+
 def load_spec_text(folder: Path, text: str):
     path = folder / "spec.yaml"
     path.write_text(text)
