@@ -135,6 +135,37 @@ def test_a_run_whose_configuration_turns_realism_on_records_its_world(tmp_path):
     assert {load_qtable(t).meta.get("world") for t in tables} == {"koolio-real"}
 
 
+def test_an_output_folder_of_another_spec_or_command_is_refused(tmp_path, capsys):
+    """A sweep into a folder holding another spec's results would mix them in
+    results.csv (and replace spec.yaml and configs.csv): refused, as a folder that is not
+    a sweep's is; the same spec, or one that only adds runs, resumes."""
+    from tests.inputs import expect_error
+
+    one = SPEC.replace("seeds: [0, 1]", "seeds: [0]").replace("0.1, 0.5", "0.1")
+    (tmp_path / "a.yaml").write_text(one)
+    (tmp_path / "b.yaml").write_text(one.replace("[0.1]", "[0.5]"))
+    (tmp_path / "more.yaml").write_text(one.replace("seeds: [0]", "seeds: [0, 1]"))
+    out = tmp_path / "out"
+    sweep = ["sweep", "--out", str(out), "--workers", "1", "--no-plot"]
+    assert cli.main([*sweep, str(tmp_path / "a.yaml")]) == 0
+    capsys.readouterr()
+    expect_error(capsys, out, [*sweep, str(tmp_path / "b.yaml")],
+                 f"{out}: --out: holds 1 finished run of another spec ('alpha=0.1-",
+                 "spec.yaml line 7 was 'learner.alpha: [0.1]', now 'learner.alpha: [0.5]'",
+                 "give a new --out")  # fmt: skip
+    expect_error(capsys, out, [*sweep, str(tmp_path / "a.yaml"), "--world", "koolio-real"],
+                 "the same spec.yaml: its runs had another --world")  # fmt: skip
+    assert cli.main([*sweep, str(tmp_path / "more.yaml")]) == 0
+    assert "2 runs (1 already done, 1 to run)" in capsys.readouterr().out
+    assert len(_rows(out)) == 2
+    transfer = tmp_path / "transfer"
+    transfer.mkdir()
+    (transfer / "transfer.json").write_text("{}")
+    expect_error(capsys, transfer, [*sweep[:1], str(tmp_path / "a.yaml"), "--out", str(transfer)],
+                 f"{transfer}: --out: not a sweep's folder (it holds 'transfer.json'")  # fmt: skip
+    assert sorted(p.name for p in transfer.iterdir()) == ["transfer.json"]  # no lock file
+
+
 def load_spec_text(folder: Path, text: str):
     path = folder / "spec.yaml"
     path.write_text(text)
