@@ -620,16 +620,21 @@ def describe_world(meta: dict[str, Any]) -> str:
 
 
 def check_record(
-    table: QTable, record: dict[str, str], source: str, default_goal: str | None = None
+    table: QTable,
+    record: dict[str, str],
+    source: str,
+    default_goal: str | None = None,
+    table_goal: str | None = None,
 ) -> None:
     """Refuse to continue a table trained for another goal or in another world than the
     run's ``record`` (``goal``, ``world``; absent: the defaults, ``default_goal`` being the
-    arena's active goal). One line, with what to do instead: the same flag as the
-    table's run, or a new table started from it.
+    run's arena's active goal, ``table_goal`` that of the arena the table was learned in,
+    when known). One line, with what to do instead: the same flag as the table's run, or
+    a new table started from it.
 
     >>> t = QTable(KeywordLayout((("A", 3),)))
     >>> check_record(t, {}, "t.qtable")
-    >>> check_record(t, {"goal": "random"}, "t.qtable", "311")  # doctest: +ELLIPSIS
+    >>> check_record(t, {"goal": "random"}, "t.qtable", "311", "311")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
     koolio_pymunk.store.errors.QTableError: t.qtable: goal: trained for goal 311, this run ...
@@ -639,7 +644,7 @@ def check_record(
         if theirs == mine:
             continue
         if key == "goal":
-            was, now = describe_goal(table.meta, default_goal), describe_goal(record, default_goal)
+            was, now = describe_goal(table.meta, table_goal), describe_goal(record, default_goal)
         else:
             was, now = describe_world(table.meta), describe_world(record)
         if key == "world":

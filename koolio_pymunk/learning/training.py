@@ -70,6 +70,7 @@ __all__ = [
     "arena_goal",
     "evaluate",
     "run_record",
+    "table_arena_goal",
     "train",
     "world_label",
 ]
@@ -136,6 +137,15 @@ def arena_goal(env: KoolioEnv) -> str:
         return _file_goal(arena.source, env.config.robot.radius, st.st_mtime_ns, st.st_size)
     except (KoolioError, OSError):  # an arena made in memory: its own active goal
         return arena.active_goal
+
+
+def table_arena_goal(table: QTable, env: KoolioEnv) -> str | None:
+    """The active goal of the arena ``table`` was learned in, when that arena is ``env``'s
+    (the name and content it records are ``env``'s arena's): ``env``'s arena file's active
+    goal (:func:`arena_goal`). None when the table was learned in another arena or does
+    not say: a table records its goal only when it is not its arena's active one, so
+    ``env``'s would name the wrong goal (the room's 201 for a table of the hallway's 311)."""
+    return arena_goal(env) if table.meta.get("arena") == arena_record(env.arena) else None
 
 
 @functools.lru_cache(maxsize=16)
@@ -253,7 +263,7 @@ class RunFiles:
             return None
         check_compatible(table, env.layout, sensor_signature(env.config), str(store.path))
         record = run_record(env) if record is None else record
-        check_record(table, record, str(store.path), arena_goal(env))
+        check_record(table, record, str(store.path), arena_goal(env), table_arena_goal(table, env))
         attach(table, env.config.learner, str(store.path))  # the same algorithm
         return table
 

@@ -221,6 +221,25 @@ def test_eval_prints_every_outcome_the_world_and_the_goal(here, capsys) -> None:
     ]
 
 
+def test_eval_in_another_arena_does_not_name_this_arenas_goal(here, capsys) -> None:
+    """A table of the room (goal 201, not recorded: the room's active goal) scored in the
+    hallway was said to be trained for goal 311, the hallway's; resuming it there for
+    another goal named 311 too."""
+    assert run(capsys, "train", *ROOM, "--episodes", "1", "--quiet", "--log", "")[0] == 0
+    hallway = ["--arena", "hallway", "--config", "tiny.yaml", "--qtable", "runs/room.qtable"]
+    code, out, err = run(capsys, "eval", *hallway, "--episodes", "1")
+    assert code == 0 and "learned in arena 'room'" in err
+    assert out.splitlines()[0] == (
+        "greedy evaluation of runs/room.qtable (1 episode, trained in arena room for its "
+        "active goal, in the ideal world)"
+    )
+    expect_error(capsys, here, ["train", *hallway, "--goal", "random", "--episodes", "3"],
+                 "runs/room.qtable: goal: trained for the arena's active goal, this run asks "
+                 "for a random goal per episode")  # fmt: skip
+    code, out, _ = run(capsys, "eval", *ROOM, "--episodes", "1")  # at home: the number
+    assert "(1 episode, trained for goal 201 in the ideal world)" in out.splitlines()[0]
+
+
 def test_eval_of_a_policy_file_does_not_guess_its_goal_and_world(here, capsys) -> None:
     argv = ["--qtable", "g.qtable", "--log", ""]
     assert run(capsys, "train", *ROOM, *argv, "--goal", "random", "--episodes", "1")[0] == 0
