@@ -724,14 +724,28 @@ def _starts_with_brace(p: Path) -> bool:
 
 def _trained_for(table, env, policy: bool = False) -> str:
     """``trained for goal 311 in the ideal world``, from what the table records (a
-    policy file records neither)."""
+    policy file records neither). The goal is named by its number only when the table was
+    learned in this arena (its name and content); a table of another arena names that
+    arena and its goal as recorded: ``trained in arena hallway for its active goal, in
+    the ideal world`` (a table records its goal only when it is not its arena's
+    active one, and this arena's active goal is not that arena's)."""
     from ..learning.qtable import describe_goal, describe_world
-    from ..learning.training import arena_goal
+    from ..learning.training import table_arena_goal
+    from ..store.errors import shown
 
     if policy:
         return "a policy file: its goal and world are not recorded"
-    goal = describe_goal(table.meta, arena_goal(env))
-    return f"trained for {goal} in {describe_world(table.meta)}"
+    world = describe_world(table.meta)
+    home = table_arena_goal(table, env)
+    arena = table.meta.get("arena")
+    if home is not None or not isinstance(arena, dict):
+        return f"trained for {describe_goal(table.meta, home)} in {world}"
+    name = arena.get("name")
+    other = "another version of arena" if name == env.arena.name else "arena"
+    if not (isinstance(name, str) and name.isprintable() and len(name) <= 60):
+        name = shown(name, 60)  # a header's string, on the report's one line
+    goal = "its active goal" if "goal" not in table.meta else describe_goal(table.meta)
+    return f"trained in {other} {name} for {goal}, in {world}"
 
 
 def warn_table(table, source: str, env, policy: bool = False) -> None:

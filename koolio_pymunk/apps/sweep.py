@@ -55,7 +55,10 @@ the driver, which writes them, so Ray workers need no shared filesystem (but nee
 **Resume.** Running the same command again skips every run that has a row in
 ``results.csv`` (or a ``result.json``); an interrupted run is redone from its start. A
 run's id includes a hash of its full resolved configuration, so changing a setting (or a
-default) makes new runs rather than mixing results.
+default) makes new runs rather than mixing results. An output folder holds one spec's
+runs (:func:`check_out`): a spec that only adds runs (more seeds) resumes into it, a spec
+with runs the folder's finished ones are not (another value, ``--world``, defaults) is
+refused, and so is a folder that is neither empty nor a sweep's.
 
 **Faults.** A sweep holds a lock on its output folder (``.sweep.lock``): a second sweep
 into the same folder is refused. Local workers are processes of this module's own pool:
@@ -512,12 +515,13 @@ def run_one(task: dict[str, Any]) -> dict[str, Any]:
     from ..learning.training import evaluate, train
     from ..store.config import config_from_dict
     from ..store.files import read_bytes
+    from ..store.worlds import world_name
     from ..task.env import KoolioEnv
 
     cfg = config_from_dict(task["config"], task["run_id"])
     env = KoolioEnv(arena=task["arena_obj"], config=cfg, goal=task["goal"])
     if task.get("world") is not None:  # its realism is in cfg; the table records its name
-        env.world_name = str(task["world"])
+        env.world_name = world_name(cfg, task["world"])
     seed = int(task["seed"])
     episodes, every = int(task["episodes"]), int(task["eval_every"])
     checkpoints: list[dict[str, Any]] = []
@@ -684,7 +688,8 @@ class Results:
         self.rows[str(row["run_id"])] = {k: _cell(v) for k, v in row.items()}
 
     def save(self, order: list[str]) -> None:
-        """Rewrite the file: runs in ``order`` first, then any others (older specs)."""
+        """Rewrite the file: runs in ``order`` first, then any others (none: a folder with
+        another spec's runs is refused, :func:`check_out`)."""
         from ..learning.qtable import atomic_write
 
         cols = list(RESULT_COLUMNS)
@@ -715,14 +720,77 @@ def run_sweep(
     say = report or (lambda s: None)
     started = time.perf_counter()
     tasks = plan(spec)
-    lock = FileLock(out, "koolio-pm sweep", path=out / ".sweep.lock")
+    lock = FileLock(out, "koolio-pm sweep", path=out / LOCK_NAME)
     if out.exists() and not out.is_dir():
         raise KoolioError(located(str(out), "", "is a file, not a folder (--out)"))
+    check_out(out, spec, tasks)  # before the lock: a refused folder gets no lock file
     lock.acquire()
     try:
+        check_out(out, spec, tasks)  # again: another sweep may have written it since
         return _run_locked(spec, out, tasks, workers, ray_address, plot, say, started)
     finally:
         lock.release()
+
+
+#: The lock file of a sweep's output folder.
+LOCK_NAME = ".sweep.lock"
+
+
+def check_out(out: Path, spec: SweepSpec, tasks: list[dict[str, Any]]) -> None:
+    """Refuse an output folder whose results a sweep of ``spec`` would mix with its own:
+    a folder that is not new, not empty and not a sweep's (no ``spec.yaml`` or
+    ``results.csv``: e.g. ``transfer``'s), or a sweep's holding finished runs (rows of
+    ``results.csv``, ``runs/*/*/result.json``) that ``spec`` does not plan: another spec's,
+    or this one's with another ``--world`` or other defaults. The same spec resumes, and so
+    does one that only adds runs (more seeds, another grid value)."""
+    if not out.is_dir():
+        return
+    names = sorted(p.name for p in out.iterdir() if p.name != LOCK_NAME)
+    if not names:
+        return
+    if "spec.yaml" not in names and "results.csv" not in names:
+        shown_names = ", ".join(shown(n, 40) for n in names[:3]) + (", ..." * (len(names) > 3))
+        raise KoolioError(
+            located(
+                str(out),
+                "--out",
+                f"not a sweep's folder (it holds {shown_names}; no spec.yaml or results.csv): "
+                "give a new or empty --out",
+            )
+        )
+    done = set(Results(out / "results.csv").rows) if "results.csv" in names else set()
+    done |= {f"{p.parent.parent.name}/{p.parent.name}" for p in out.glob("runs/*/*/result.json")}
+    others = sorted(done - {t["run_id"] for t in tasks})
+    if others:
+        raise KoolioError(
+            located(
+                str(out),
+                "--out",
+                f"holds {len(others)} finished run{'s' if len(others) > 1 else ''} of another "
+                f"spec ({shown(others[0], 80)}{', ...' if len(others) > 1 else ''}; "
+                f"{_spec_change(out / 'spec.yaml', spec.text)}), which this spec's would be "
+                "mixed with: give a new --out",
+            )
+        )
+
+
+def _spec_change(path: Path, text: str) -> str:
+    """What differs between the spec in ``path`` (a folder's ``spec.yaml``) and ``text``:
+    the first line that does, for a message.
+    """
+    from ..store.files import read_text
+
+    try:
+        old = read_text(path, MAX_SPEC_BYTES, "sweep spec").splitlines()
+    except KoolioError:
+        return "its spec.yaml is missing or unreadable"
+    new = text.splitlines()
+    for i, (a, b) in enumerate(itertools.zip_longest(old, new, fillvalue=None), 1):
+        if a != b:
+            was = "nothing" if a is None else shown(a.strip(), 60)
+            now = "nothing" if b is None else shown(b.strip(), 60)
+            return f"spec.yaml line {i} was {was}, now {now}"
+    return "the same spec.yaml: its runs had another --world, other defaults or arena path"
 
 
 def _run_locked(

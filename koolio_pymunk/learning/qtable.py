@@ -31,9 +31,11 @@ one-line :class:`~koolio_pymunk.store.errors.QTableError` naming the item).
 **What a table records of its run** (:func:`check_record`). ``goal`` is recorded only when
 the run's goal is not the arena's active goal (``random``, or another door), ``world`` only
 when the run was not in the ideal world (a profile name such as ``koolio-real``, or a world
-file's name): an absent key means the default, so a default run writes the bytes of a
-table made before these keys existed. A run that would continue a table trained for
-another goal or in another world is refused (:func:`check_record`); ``eval`` names both.
+file's name; from ``--world`` or from a configuration whose realism is on alike:
+:mod:`koolio_pymunk.store.worlds`): an absent key means the default, so a default run
+writes the bytes of a table made before these keys existed. A run that would continue a
+table trained for another goal or in another world is refused (:func:`check_record`);
+``eval`` names both.
 
 A table learned with an algorithm other than one-step Q records it in the header
 (``algorithm``: its name and parameters) and may carry data sections after the values,
@@ -57,6 +59,7 @@ import dataclasses
 import itertools
 import json
 import os
+import re
 import struct
 import sys
 import zlib
@@ -622,16 +625,21 @@ def describe_world(meta: dict[str, Any]) -> str:
 
 
 def check_record(
-    table: QTable, record: dict[str, str], source: str, default_goal: str | None = None
+    table: QTable,
+    record: dict[str, str],
+    source: str,
+    default_goal: str | None = None,
+    table_goal: str | None = None,
 ) -> None:
     """Refuse to continue a table trained for another goal or in another world than the
     run's ``record`` (``goal``, ``world``; absent: the defaults, ``default_goal`` being the
-    arena's active goal). One line, with what to do instead: the same flag as the
-    table's run, or a new table started from it.
+    run's arena's active goal, ``table_goal`` that of the arena the table was learned in,
+    when known). One line, with what to do instead: the same flag as the table's run, or
+    a new table started from it.
 
     >>> t = QTable(KeywordLayout((("A", 3),)))
     >>> check_record(t, {}, "t.qtable")
-    >>> check_record(t, {"goal": "random"}, "t.qtable", "311")  # doctest: +ELLIPSIS
+    >>> check_record(t, {"goal": "random"}, "t.qtable", "311", "311")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
     koolio_pymunk.store.errors.QTableError: t.qtable: goal: trained for goal 311, this run ...
@@ -641,10 +649,13 @@ def check_record(
         if theirs == mine:
             continue
         if key == "goal":
-            was, now = describe_goal(table.meta, default_goal), describe_goal(record, default_goal)
+            was, now = describe_goal(table.meta, table_goal), describe_goal(record, default_goal)
         else:
             was, now = describe_world(table.meta), describe_world(record)
-        same = f"{flag} {theirs}" if theirs is not None else f"no {flag}"
+        if key == "world":
+            same = _same_world(theirs)
+        else:
+            same = f"{flag} {theirs}" if theirs is not None else f"no {flag}"
         raise QTableError(
             located(
                 source,
@@ -653,6 +664,22 @@ def check_record(
                 f"it, or give a new --qtable (with --init-qtable {source} to start from it)",
             )
         )
+
+
+def _same_world(world: str | None) -> str:
+    """How to run in the world a table records again (``--world`` or ``--config``, which
+    name it alike: :mod:`koolio_pymunk.store.worlds`).
+
+    >>> _same_world(None), _same_world("koolio-real")
+    ('no --world and no realism in --config', '--world koolio-real (or --config koolio-real)')
+    >>> _same_world("realism-0123abcd")
+    'a --config (and --world) with the same realism section'
+    """
+    if world is None:
+        return "no --world and no realism in --config"
+    if re.fullmatch(r"realism-[0-9a-f]{8}", world):
+        return "a --config (and --world) with the same realism section"
+    return f"--world {world} (or --config {world})"
 
 
 def _profile_hint(table: QTable) -> str:

@@ -38,6 +38,7 @@ from ..store.episode_log import LogWriter, check_log_path, log_rows
 from ..store.errors import KoolioError, located
 from ..store.interrupts import SafeInterrupt
 from ..store.locks import check_lock_file
+from ..store.worlds import world_label as world_label  # how a table names a world
 from ..task.env import KoolioEnv
 from ..world.arena import arena_path, arena_record, load_arena
 from .algorithms import attach, make_learner
@@ -70,6 +71,7 @@ __all__ = [
     "arena_goal",
     "evaluate",
     "run_record",
+    "table_arena_goal",
     "train",
     "world_label",
 ]
@@ -107,25 +109,13 @@ class Progress:
         )
 
 
-def world_label(world: str | Path | None) -> str:
-    """How a table records the world ``--world`` named: a profile's name, a world file's
-    name without its folders (two spellings of one path agree), ``ideal`` for none.
-
-    >>> world_label(None), world_label("koolio-real"), world_label("worlds/lab.yaml")
-    ('ideal', 'koolio-real', 'lab.yaml')
-    """
-    if world is None or str(world) == "ideal":
-        return "ideal"
-    text = str(world)
-    return Path(text).name if text.endswith((".yaml", ".yml")) or "/" in text else text
-
-
 def run_record(env: KoolioEnv) -> dict[str, str]:
     """What a table records of a run in ``env`` besides the arena
     (:func:`~koolio_pymunk.learning.qtable.check_record`): ``goal`` when it is not the
     arena file's active goal (``random`` or another door), ``world`` when it is not the
-    ideal one. Empty for a default run, whose table bytes therefore stay those of tables
-    written before these keys existed."""
+    ideal one (:attr:`~koolio_pymunk.task.env.KoolioEnv.world_name`: from ``--world`` or
+    from a configuration whose realism is on). Empty for a default run, whose table bytes
+    therefore stay those of tables written before these keys existed."""
     out: dict[str, str] = {}
     goal = "random" if env.random_goal else env.goal_name
     if goal != arena_goal(env):
@@ -148,6 +138,15 @@ def arena_goal(env: KoolioEnv) -> str:
         return _file_goal(arena.source, env.config.robot.radius, st.st_mtime_ns, st.st_size)
     except (KoolioError, OSError):  # an arena made in memory: its own active goal
         return arena.active_goal
+
+
+def table_arena_goal(table: QTable, env: KoolioEnv) -> str | None:
+    """The active goal of the arena ``table`` was learned in, when that arena is ``env``'s
+    (the name and content it records are ``env``'s arena's): ``env``'s arena file's active
+    goal (:func:`arena_goal`). None when the table was learned in another arena or does
+    not say: a table records its goal only when it is not its arena's active one, so
+    ``env``'s would name the wrong goal (the room's 201 for a table of the hallway's 311)."""
+    return arena_goal(env) if table.meta.get("arena") == arena_record(env.arena) else None
 
 
 @functools.lru_cache(maxsize=16)
@@ -267,7 +266,7 @@ class RunFiles:
             return None
         check_compatible(table, env.layout, sensor_signature(env.config), str(store.path))
         record = run_record(env) if record is None else record
-        check_record(table, record, str(store.path), arena_goal(env))
+        check_record(table, record, str(store.path), arena_goal(env), table_arena_goal(table, env))
         attach(table, env.config.learner, str(store.path))  # the same algorithm
         return table
 

@@ -17,6 +17,7 @@ from ..store.config import Config, apply_world, load_config, state_fields
 from ..store.errors import ConfigError
 from ..store.keyword import KeywordLayout
 from ..store.realism_config import Randomizer, RealismConfig, motion_on
+from ..store.worlds import world_name
 from ..world.arena import Arena, Point, load_arena
 from ..world.motion_errors import MotionErrors
 from ..world.physics import ACTION_NAMES, Action, World
@@ -97,7 +98,9 @@ class KoolioEnv(gym.Env):
 
     **World.** ``world`` (a profile name such as ``koolio-real``, or a file) lays the
     realism models and sensor noise of a world over the configuration
-    (:func:`~koolio_pymunk.store.config.apply_world`); the default is the ideal world. The
+    (:func:`~koolio_pymunk.store.config.apply_world`); the default is the ideal world,
+    unless the configuration's own ``realism`` section is on (``config="koolio-real"``).
+    :attr:`world_name` names the world either way, as a table learned here records it. The
     realism models (:mod:`koolio_pymunk.sensing.realism`) act on every reading and move; with
     ``realism.randomize`` each reset draws the episode's parameters
     (:attr:`realism_draw`). :attr:`readings` holds what a real robot's driver would hand
@@ -124,11 +127,13 @@ class KoolioEnv(gym.Env):
             modes = ", ".join(repr(m) for m in self.metadata["render_modes"])
             raise ValueError(f"render_mode: {render_mode!r} is not one of None, {modes}")
         # A configuration passed in is copied, never changed (``max_steps``, ``world``).
-        cfg = copy.deepcopy(config) if isinstance(config, Config) else load_config(config)
-        if world is not None:
-            cfg = apply_world(cfg, world)
-        self.world_name = "ideal" if world is None else str(world)
-        """The world laid over the configuration (``--world``), or ``ideal``."""
+        own = copy.deepcopy(config) if isinstance(config, Config) else load_config(config)
+        cfg = apply_world(own, world) if world is not None else own
+        self.world_name = world_name(cfg, world, own.realism)
+        """The world the env runs in, however its realism was turned on: ``ideal``, the
+        world laid over the configuration (``--world``), a shipped profile's name, or
+        ``realism-`` and a hash of other realism
+        (:func:`~koolio_pymunk.store.worlds.world_name`); a table learned here records it."""
         self.config = cfg
         if max_steps is not None:
             self.config.episode.max_steps = int(max_steps)

@@ -20,6 +20,7 @@ os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
 
 from koolio_pymunk.apps import cli
 from koolio_pymunk.learning.qtable import QTableStore, load_qtable, sensor_signature
+from koolio_pymunk.store.config import PROFILE_DIR
 from koolio_pymunk.task.env import KoolioEnv
 from koolio_pymunk.world.arena import arena_record
 from tests.inputs import expect_error, header_of
@@ -155,6 +156,43 @@ def test_the_header_records_goal_and_world_only_when_not_the_defaults(here, caps
     assert header["w"]["world"] == "koolio-real" and "goal" not in header["w"]
 
 
+def test_a_configuration_with_realism_records_the_world_it_ran_in(here, capsys) -> None:
+    """``--config koolio-real`` (the profile says it is a valid way to use it) runs the
+    realistic world: its table records it as ``--world koolio-real``'s does, ``eval`` there
+    does not warn of a transfer, and neither table resumes quietly in the other world."""
+    real = (PROFILE_DIR / "koolio-real.yaml").read_text() + "episode: {max_steps: 30}\n"
+    (here / "real.yaml").write_text(real)  # koolio-real's realism, tiny.yaml's episodes
+    quiet = ["--arena", "room", "--episodes", "2", "--log", ""]
+    code, out, _ = run(capsys, "train", *quiet, "--config", "real.yaml", "--qtable", "c.qtable")
+    assert code == 0 and out.splitlines()[0].startswith(
+        "new table c.qtable: 2 episodes; arena room, goal 201, world koolio-real, seed 0"
+    )
+    argv = ["train", *ROOM, "--world", "koolio-real", "--qtable", "w.qtable", "--log", ""]
+    assert run(capsys, *argv, "--episodes", "2", "--quiet")[0] == 0
+    assert header_of((here / "c.qtable").read_bytes())["world"] == "koolio-real"
+    assert (here / "c.qtable").read_bytes() == (here / "w.qtable").read_bytes()
+    code, out, err = run(capsys, "eval", *ROOM, "--world", "koolio-real", "--qtable", "c.qtable",
+                         "--episodes", "1")  # fmt: skip
+    assert code == 0 and err == ""
+    assert "(2 episodes, trained for goal 201 in world koolio-real)" in out.splitlines()[0]
+    expect_error(capsys, here, ["train", *ROOM, "--qtable", "c.qtable", "--episodes", "3"],
+                 "c.qtable: world: trained for world koolio-real, this run asks for the ideal "
+                 "world: run with --world koolio-real (or --config koolio-real)")  # fmt: skip
+    assert run(capsys, "train", *ROOM, "--qtable", "i.qtable", *quiet[2:], "--quiet")[0] == 0
+    expect_error(capsys, here, ["train", *quiet, "--config", "real.yaml", "--qtable", "i.qtable"],
+                 "i.qtable: world: trained for the ideal world, this run asks for world "
+                 "koolio-real: run with no --world and no realism in --config")  # fmt: skip
+    # realism that is no shipped world's: named by its content
+    (here / "drifty.yaml").write_text(real.replace("drift_deg: 0.43", "drift_deg: 1.0"))
+    argv = ["train", *quiet, "--config", "drifty.yaml", "--qtable", "d.qtable", "--quiet"]
+    assert run(capsys, *argv)[0] == 0
+    drifty = header_of((here / "d.qtable").read_bytes())["world"]
+    assert re.fullmatch(r"realism-[0-9a-f]{8}", drifty)
+    expect_error(capsys, here, ["train", *quiet, "--config", "real.yaml", "--qtable", "d.qtable"],
+                 f"d.qtable: world: trained for world {drifty}, this run asks for world "
+                 "koolio-real: run with a --config (and --world) with the same")  # fmt: skip
+
+
 # -- 3. eval shows every outcome, where it scores, and what it scores -------------------------
 def test_eval_prints_every_outcome_the_world_and_the_goal(here, capsys) -> None:
     assert (
@@ -181,6 +219,25 @@ def test_eval_prints_every_outcome_the_world_and_the_goal(here, capsys) -> None:
     assert err.splitlines() == [
         "warning: runs/room.qtable: trained in world koolio-real, scored here in the ideal world"
     ]
+
+
+def test_eval_in_another_arena_does_not_name_this_arenas_goal(here, capsys) -> None:
+    """A table of the room (goal 201, not recorded: the room's active goal) scored in the
+    hallway was said to be trained for goal 311, the hallway's; resuming it there for
+    another goal named 311 too."""
+    assert run(capsys, "train", *ROOM, "--episodes", "1", "--quiet", "--log", "")[0] == 0
+    hallway = ["--arena", "hallway", "--config", "tiny.yaml", "--qtable", "runs/room.qtable"]
+    code, out, err = run(capsys, "eval", *hallway, "--episodes", "1")
+    assert code == 0 and "learned in arena 'room'" in err
+    assert out.splitlines()[0] == (
+        "greedy evaluation of runs/room.qtable (1 episode, trained in arena room for its "
+        "active goal, in the ideal world)"
+    )
+    expect_error(capsys, here, ["train", *hallway, "--goal", "random", "--episodes", "3"],
+                 "runs/room.qtable: goal: trained for the arena's active goal, this run asks "
+                 "for a random goal per episode")  # fmt: skip
+    code, out, _ = run(capsys, "eval", *ROOM, "--episodes", "1")  # at home: the number
+    assert "(1 episode, trained for goal 201 in the ideal world)" in out.splitlines()[0]
 
 
 def test_eval_of_a_policy_file_does_not_guess_its_goal_and_world(here, capsys) -> None:

@@ -112,6 +112,60 @@ def test_a_run_in_another_world_records_it_in_its_table(tmp_path):
     assert {load_qtable(t).meta.get("world") for t in tables} == {"koolio-real"}
 
 
+def test_a_run_whose_configuration_turns_realism_on_records_its_world(tmp_path):
+    """``config: koolio-real`` is the world koolio-real, as ``--world`` is; realism swept
+    in the grid is named by its content, one world per value."""
+    from koolio_pymunk.learning.qtable import load_qtable
+
+    text = SPEC.replace("seeds: [0, 1]", "seeds: [0]").replace(
+        "learner.alpha: [0.1, 0.5]", "realism.motion.drift_deg: [0.0, 1.0]"
+    )
+    spec = load_spec_text(tmp_path, text + "config: koolio-real\n")
+    run_sweep(spec, tmp_path / "out", workers=1, plot=False, report=None)
+    worlds = {t.parent.parent.name.split("-")[0]: load_qtable(t).meta.get("world")
+              for t in (tmp_path / "out").glob("runs/*/*/qtable.qtable")}  # fmt: skip
+    assert worlds["drift_deg=0.0"].startswith("realism-")  # koolio-real without its drift
+    assert worlds["drift_deg=1.0"].startswith("realism-")
+    assert len(set(worlds.values())) == 2
+    spec = load_spec_text(
+        tmp_path, SPEC.replace("seeds: [0, 1]", "seeds: [0]") + "config: koolio-real\n"
+    )
+    run_sweep(spec, tmp_path / "real", workers=1, plot=False, report=None)
+    tables = sorted((tmp_path / "real").glob("runs/*/*/qtable.qtable"))
+    assert {load_qtable(t).meta.get("world") for t in tables} == {"koolio-real"}
+
+
+def test_an_output_folder_of_another_spec_or_command_is_refused(tmp_path, capsys):
+    """A sweep into a folder holding another spec's results would mix them in
+    results.csv (and replace spec.yaml and configs.csv): refused, as a folder that is not
+    a sweep's is; the same spec, or one that only adds runs, resumes."""
+    from tests.inputs import expect_error
+
+    one = SPEC.replace("seeds: [0, 1]", "seeds: [0]").replace("0.1, 0.5", "0.1")
+    (tmp_path / "a.yaml").write_text(one)
+    (tmp_path / "b.yaml").write_text(one.replace("[0.1]", "[0.5]"))
+    (tmp_path / "more.yaml").write_text(one.replace("seeds: [0]", "seeds: [0, 1]"))
+    out = tmp_path / "out"
+    sweep = ["sweep", "--out", str(out), "--workers", "1", "--no-plot"]
+    assert cli.main([*sweep, str(tmp_path / "a.yaml")]) == 0
+    capsys.readouterr()
+    expect_error(capsys, out, [*sweep, str(tmp_path / "b.yaml")],
+                 f"{out}: --out: holds 1 finished run of another spec ('alpha=0.1-",
+                 "spec.yaml line 7 was 'learner.alpha: [0.1]', now 'learner.alpha: [0.5]'",
+                 "give a new --out")  # fmt: skip
+    expect_error(capsys, out, [*sweep, str(tmp_path / "a.yaml"), "--world", "koolio-real"],
+                 "the same spec.yaml: its runs had another --world")  # fmt: skip
+    assert cli.main([*sweep, str(tmp_path / "more.yaml")]) == 0
+    assert "2 runs (1 already done, 1 to run)" in capsys.readouterr().out
+    assert len(_rows(out)) == 2
+    transfer = tmp_path / "transfer"
+    transfer.mkdir()
+    (transfer / "transfer.json").write_text("{}")
+    expect_error(capsys, transfer, [*sweep[:1], str(tmp_path / "a.yaml"), "--out", str(transfer)],
+                 f"{transfer}: --out: not a sweep's folder (it holds 'transfer.json'")  # fmt: skip
+    assert sorted(p.name for p in transfer.iterdir()) == ["transfer.json"]  # no lock file
+
+
 def load_spec_text(folder: Path, text: str):
     path = folder / "spec.yaml"
     path.write_text(text)
