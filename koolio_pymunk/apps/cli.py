@@ -797,6 +797,7 @@ def cmd_info(args: argparse.Namespace) -> int:
     from .export import load_any_table
 
     cfg = load_config(args.config)
+    table = load_any_table(args.qtable) if args.qtable else None  # a bad one: its line only
     paper = KeywordLayout(PAPER_ORIGINAL_FIELDS)
     now = KeywordLayout(tuple(state_fields(cfg.sensors)))
     print("State space (paper §5.4.8; dense tables of 8-byte doubles):")
@@ -810,8 +811,7 @@ def cmd_info(args: argparse.Namespace) -> int:
         print(f"    dense   {human_bytes(lay.dense_bytes()):>16}")
     print(f"Keyword ({now.total_bits} bits, Table 12):")
     print("  " + " | ".join(f"{n}<<{s}" for (n, _), s in zip(now.fields, now.shifts)) + " | Action")
-    if args.qtable:
-        table = load_any_table(args.qtable)
+    if table is not None:
         share = table.entries / table.layout.n_entries
         print(
             f"Q-table {args.qtable}: {len(table):,} states visited, {table.entries:,} entries "

@@ -271,3 +271,15 @@ def test_a_table_in_use_is_the_only_line_train_prints(tmp_path, capsys):
     out, err = capsys.readouterr()
     assert out == ""
     assert err.count("\n") == 1 and "t.qtable: in use by process" in err
+
+
+def test_info_of_a_bad_table_says_only_that(tmp_path, capsys):
+    """``info --qtable BAD``: the one error line, not the state-space block first
+    (newcomer audit)."""
+    bad = tmp_path / "bad.qtable"
+    bad.write_bytes(b"garbage")
+    assert main(["info", "--qtable", str(bad)]) == 2
+    out, err = capsys.readouterr()
+    assert out == ""
+    want = "neither a .qtable file nor a koolio-policy (JSON) file"
+    assert err == f"koolio-pm: error: {bad}: {want}\n"
