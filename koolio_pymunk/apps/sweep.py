@@ -423,30 +423,41 @@ def plan(spec: SweepSpec) -> list[dict[str, Any]]:
             where = f"runs[{v_index}]" if spec.runs else "grid"
             label = _label(variant.get("name"), combo if variant.get("name") else params)
             arena = str(params.pop("arena", spec.arena))
+            goal_item = f"{where}: goal" if "goal" in params else "goal"
             goal = params.pop("goal", spec.goal)
             rotate = params.pop("rotate_deg", spec.rotate_deg)
             if rotate is not None:
                 rotate = _rotation(rotate, spec.source, f"{where}: rotate_deg")
             goal = None if goal is None else str(goal)
             world = spec.world
+            world_item = "world"
             if "world" in params:  # a grid or runs value: relative to the spec, like arena
                 given = params.pop("world")
                 world = None if given is None else _config_ref(str(given), Path(spec.source).parent)
+                world_item = f"{where}: world"
             overrides = _deep_merge(expand_dotted(spec.base), expand_dotted(params))
             try:
                 cfg = load_config(spec.config_path, overrides, world=world)
             except KoolioError as exc:
                 why = str(exc).removeprefix("<defaults>: ")
-                raise ConfigError(f"{spec.source}: {where}: {why}") from None
+                item = where
+                for flag, named in (("--world: ", world_item), ("--config: ", "config")):
+                    if why.startswith(flag):  # a profile name: the spec's key, not a flag
+                        why, item = why.removeprefix(flag), named
+                raise ConfigError(f"{spec.source}: {item}: {why}") from None
             key = (arena, cfg.robot.radius)
             if key not in arenas:
-                arenas[key] = load_arena(arena, cfg.robot.radius)
+                try:
+                    arenas[key] = load_arena(arena, cfg.robot.radius)
+                except KoolioError as exc:
+                    named = "arena" if arena == str(spec.arena) else f"{where}: arena"
+                    raise ConfigError(f"{spec.source}: {named}: {exc}") from None
             arena_obj = arenas[key]
             if rotate is not None:  # the paper's trick, swept without a copy of the file
                 arena_obj = dataclasses.replace(arena_obj, rotate_deg=rotate)
             if goal is not None and goal != "random" and goal not in arena_obj.goal_names():
                 raise ConfigError(
-                    f"{spec.source}: {where}: goal: no goal named {goal!r} in {arena} "
+                    f"{spec.source}: {goal_item}: no goal named {goal!r} in {arena} "
                     f"(goals: {', '.join(arena_obj.goal_names())})"
                 )
             settings = {

@@ -256,7 +256,11 @@ def test_bad_specs_fail_in_one_line(data, message):
             "s.yaml: grid: learner.alfa: unknown key",
         ),
         ({"episodes": 3, "grid": {"learner.alpha": [2.0]}}, "learner.alpha: must be in (0, 1]"),
-        ({"episodes": 3, "goal": "999"}, "goal: no goal named '999'"),
+        ({"episodes": 3, "goal": "999"}, "s.yaml: goal: no goal named '999'"),
+        ({"episodes": 3, "grid": {"goal": ["999"]}}, "s.yaml: grid: goal: no goal named '999'"),
+        ({"episodes": 3, "arena": "nosuch"}, "s.yaml: arena: nosuch: no such arena file"),
+        ({"episodes": 3, "world": "koolio-rea"}, "s.yaml: world: koolio-rea: no such world"),
+        ({"episodes": 3, "grid": {"world": ["nope"]}}, "s.yaml: grid: world: nope: no such w"),
         ({"episodes": 3, "runs": [{"name": "x"}, {"name": "x"}]}, "'x' repeats the config"),
     ],
 )
