@@ -125,3 +125,19 @@ def test_bench_skips_its_irsim_row_with_a_note(tools, tmp_path: Path) -> None:
         "  IR-SIM row skipped: tools/irsim_compare.py: ir-sim is not installed: "
         "pip install -e '.[compare]'\n"
     )
+
+
+def test_learning_targets_refuses_a_bad_setting_in_one_line(tmp_path: Path) -> None:
+    """A mistyped ``--set`` key is one line and exit 2 before any worker starts (it was
+    a worker's traceback)."""
+    p = subprocess.run(
+        [sys.executable, str(REPO / "tools" / "learning_targets.py"), "default",
+         "--set", "learner.lambda=0.7", "--seeds", "0"],
+        capture_output=True, text=True, cwd=tmp_path, timeout=300,
+    )  # fmt: skip
+    assert p.returncode == 2, p.stderr
+    assert p.stdout == ""
+    assert p.stderr == (
+        "learning_targets: error: <defaults>: learner.lambda: unknown key (valid: algorithm, "
+        "alpha, gamma, epsilon, q_init, trace_decay, trace_cutoff, planning_steps)\n"
+    )

@@ -270,6 +270,15 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--out", default=None, help="write every result as JSON here")
     args = p.parse_args(argv)
     jobs = [j for t in args.targets for j in jobs_for(t, args)]
+    from koolio_pymunk.store.config import load_config
+    from koolio_pymunk.store.errors import KoolioError
+
+    for job in jobs:  # a bad --set or --config: one line now, not a worker's traceback
+        try:
+            load_config(job["config"], overrides=job["overrides"])
+        except KoolioError as exc:
+            print(f"learning_targets: error: {exc}", file=sys.stderr)
+            return 2
     print(f"{len(jobs)} runs on {args.workers} worker processes")
     with ProcessPoolExecutor(args.workers) as pool:
         results = list(pool.map(run_job, jobs))
