@@ -100,6 +100,38 @@ def _in_step(folder: Path) -> None:
     assert done == list(range(load_qtable(folder / "q.qtable").meta["episodes"]))
 
 
+def _stopped_run(folder: Path, command: str, signals, extra=(), **popen) -> str:
+    """Run ``koolio-pm command`` in ``folder`` until its log has a few rows, send
+    ``signals`` (``(signal, seconds to wait before it)``, ...), and return its stderr once
+    it has ended (exit status 130, at most one line, the table and the log in step)."""
+    (folder / "tiny.yaml").write_text("episode: {max_steps: 60}\n")
+    argv = [sys.executable, "-m", "koolio_pymunk", command, "--arena", "room"]
+    argv += ["--config", "tiny.yaml", "--qtable", "q.qtable", "--log", "q.csv"]
+    argv += ["--episodes", "100000"] if command == "train" else ["--steps", "10000000"]
+    env = {**os.environ, "SDL_VIDEODRIVER": "dummy", "PYTHONPATH": str(ROOT)}
+    p = subprocess.Popen(
+        [*argv, *extra], cwd=folder, env=env, stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE, **popen,
+    )  # fmt: skip
+    try:
+        deadline = time.time() + 120
+        log = folder / "q.csv"
+        while time.time() < deadline and not (log.exists() and log.stat().st_size > 200):
+            time.sleep(0.02)
+        assert p.poll() is None, p.communicate()[1]
+        for sig, gap in signals:
+            time.sleep(gap)
+            p.send_signal(sig)
+        err = p.communicate(timeout=120)[1].decode()
+    finally:
+        if p.poll() is None:
+            p.kill()
+    assert p.returncode == 130, err
+    assert "Traceback" not in err and len(err.strip().splitlines()) <= 1, err
+    _in_step(folder)
+    return err
+
+
 @pytest.mark.parametrize(
     ("command", "gaps"),
     [
@@ -108,31 +140,7 @@ def _in_step(folder: Path) -> None:
     ],
 )
 def test_ctrl_c_twice_in_a_real_process(tmp_path, command, gaps):
-    (tmp_path / "tiny.yaml").write_text("episode: {max_steps: 60}\n")
-    argv = [sys.executable, "-m", "koolio_pymunk", command, "--arena", "room"]
-    argv += ["--config", "tiny.yaml", "--qtable", "q.qtable", "--log", "q.csv"]
-    argv += ["--episodes", "100000"] if command == "train" else ["--steps", "10000000"]
-    env = {**os.environ, "SDL_VIDEODRIVER": "dummy", "PYTHONPATH": str(ROOT)}
-    p = subprocess.Popen(
-        argv, cwd=tmp_path, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
-    )
-    try:
-        deadline = time.time() + 120
-        log = tmp_path / "q.csv"
-        while time.time() < deadline and not (log.exists() and log.stat().st_size > 200):
-            time.sleep(0.02)
-        assert p.poll() is None, p.communicate()[1]
-        p.send_signal(signal.SIGINT)
-        for gap in gaps:
-            time.sleep(gap)
-            p.send_signal(signal.SIGINT)
-        err = p.communicate(timeout=120)[1].decode()
-    finally:
-        if p.poll() is None:
-            p.kill()
-    assert p.returncode == 130, err
-    assert "Traceback" not in err and len(err.strip().splitlines()) <= 1, err
-    _in_step(tmp_path)
+    _stopped_run(tmp_path, command, [(signal.SIGINT, 0.0)] + [(signal.SIGINT, g) for g in gaps])
 
 
 def test_terminate_as_interrupt_raises_keyboard_interrupt_and_restores() -> None:
@@ -162,27 +170,6 @@ def test_sigterm_saves_a_background_job_that_ignores_ctrl_c(tmp_path):
     """A job started with ``&`` from a script inherits SIGINT ignored; ``kill`` must still
     stop it at a safe point with the table saved (it ended by the signal, the table at 0
     episodes and the log ahead of it: newcomer audit)."""
-    (tmp_path / "tiny.yaml").write_text("episode: {max_steps: 60}\n")
-    argv = [sys.executable, "-m", "koolio_pymunk", "train", "--arena", "room"]
-    argv += ["--config", "tiny.yaml", "--qtable", "q.qtable", "--log", "q.csv"]
-    argv += ["--episodes", "100000", "--save-every", "100000"]
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    p = subprocess.Popen(
-        argv, cwd=tmp_path, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-        preexec_fn=_ignore_sigint,
-    )  # fmt: skip
-    try:
-        deadline = time.time() + 120
-        log = tmp_path / "q.csv"
-        while time.time() < deadline and not (log.exists() and log.stat().st_size > 200):
-            time.sleep(0.02)
-        assert p.poll() is None, p.communicate()[1]
-        p.send_signal(signal.SIGTERM)
-        err = p.communicate(timeout=120)[1].decode()
-    finally:
-        if p.poll() is None:
-            p.kill()
-    assert p.returncode == 130, err
-    assert "Traceback" not in err and len(err.strip().splitlines()) <= 1, err
+    extra = ["--save-every", "100000"]
+    _stopped_run(tmp_path, "train", [(signal.SIGTERM, 0.0)], extra, preexec_fn=_ignore_sigint)
     assert load_qtable(tmp_path / "q.qtable").meta["episodes"] > 0
-    _in_step(tmp_path)
