@@ -32,6 +32,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import difflib
+import functools
 import itertools
 import math
 import types
@@ -347,11 +348,13 @@ def profile_names() -> list[str]:
     return sorted(p.stem for p in PROFILE_DIR.glob("*.yaml"))
 
 
-def world_names() -> list[str]:
-    """Names of the shipped profiles that are worlds (set only :data:`WORLD_SECTIONS`).
+@functools.lru_cache(maxsize=1)
+def world_names() -> tuple[str, ...]:
+    """Names of the shipped profiles that are worlds (set only :data:`WORLD_SECTIONS`;
+    read once).
 
     >>> world_names()
-    ['koolio-real', 'koolio-real-dr']
+    ('koolio-real', 'koolio-real-dr')
     """
     out = []
     for name in profile_names():
@@ -360,7 +363,7 @@ def world_names() -> list[str]:
             _outside_world(str(k), v) is None for k, v in data.items()
         ):
             out.append(name)
-    return out
+    return tuple(out)
 
 
 def config_path(name: str | Path, flag: str = "--config") -> Path:

@@ -130,13 +130,7 @@ class FileLock:
         if not locked:
             holder = _read_note(fd)
             os.close(fd)
-            raise InUseError(
-                located(
-                    str(self.target),
-                    "",
-                    f"in use by {holder}; wait for it to finish or stop it (lock file {self.path})",
-                )
-            )
+            raise _in_use(self.target, self.path, holder)
         try:
             self._check_content(fd)
         except BaseException:
@@ -276,15 +270,14 @@ def _check_free(fd: int, target: Path, path: Path) -> None:
     except OSError:  # a file system without locks: as FileLock.acquire, go on
         return
     if not free:
-        raise InUseError(
-            located(
-                str(target),
-                "",
-                f"in use by {_read_note(fd)}; wait for it to finish or stop it (lock file {path})",
-            )
-        )
+        raise _in_use(target, path, _read_note(fd))
     with contextlib.suppress(OSError):
         _unlock(fd)
+
+
+def _in_use(target: Path, path: Path, holder: str) -> InUseError:
+    problem = f"in use by {holder}; wait for it to finish or stop it (lock file {path})"
+    return InUseError(located(str(target), "", problem))
 
 
 def _write_note(fd: int, note: str) -> None:
