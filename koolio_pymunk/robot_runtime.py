@@ -523,6 +523,11 @@ class Policy:
             raise PolicyError("memory: this policy's state remembers (encoding.memory): pass "
                               "the episode's Memory (Policy.new_memory)")  # fmt: skip
         n = self.encoder.n_camera
+        if action is not None and not (_is_int(action) and 0 <= action < self.layout.n_actions):
+            raise PolicyError(
+                f"action: {action!r} is not an action (0..{self.layout.n_actions - 1}, or None "
+                "after a reset or a rescue)"
+            )
         memory.update(_numbers(goal_cam, n, "goal_cam", True),
                       _numbers(eow_cam, n, "eow_cam", True), action)  # fmt: skip
         return codes + memory.codes()
@@ -821,6 +826,9 @@ def validate_document(doc: Any, source: str = "<policy>") -> None:
         is_number(v) and abs(v) <= MAX_REWARD for v in sec.values()
     ):
         raise _err(source, "rewards", f"must map names to finite numbers within +-{MAX_REWARD:g}")
+    missing = [e for e in EVENTS if e not in sec]
+    if missing:  # else the step that needs it fails, on the robot, mid-episode
+        raise _err(source, f"rewards.{missing[0]}", f"missing (the rewards of {', '.join(EVENTS)})")
     _check_learner(doc.get("learner") or {}, source)
     _check_entries(doc, source)
     if "model" in doc:
@@ -1565,11 +1573,24 @@ class Model:
         return model
 
 
+_USAGE = """usage: python robot_runtime.py [--] POLICY
+Check a koolio-policy file (koolio-pm export) and print a summary: version, states,
+episodes, keyword layout, thresholds, learner. Exit 0 when the robot can run it, 2 with one
+line 'robot_runtime: error: <file>: <item>: <problem>' when it cannot."""
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """``python robot_runtime.py POLICY``: check a policy file and print a summary."""
     args = list(sys.argv[1:] if argv is None else argv)
-    if len(args) != 1 or args[0].startswith("-"):
-        print("usage: python robot_runtime.py POLICY", file=sys.stderr)
+    if args in (["-h"], ["--help"]):
+        print(_USAGE)
+        return 0
+    if args[:1] == ["--"]:  # a file name that starts with '-'
+        args = args[1:]
+    elif args[:1] and args[0].startswith("-"):
+        args = []
+    if len(args) != 1:
+        print(f"robot_runtime: error: {_USAGE.splitlines()[0]}", file=sys.stderr)
         return 2
     try:
         p = Policy.load(args[0])

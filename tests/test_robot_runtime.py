@@ -256,3 +256,37 @@ def test_the_sonar_pings_travel_to_the_robot(tmp_path, capsys):
             rt.Policy(json.loads(json.dumps(doc)), "p.json")
     with pytest.raises(rt.PolicyError, match="2 pings"):
         rt.Encoder.median([1.0, 2.0])
+
+
+def test_the_check_refuses_what_would_fail_on_the_robot(tmp_path, capsys):
+    """``python robot_runtime.py POLICY`` is the check before the robot runs: a policy
+    without a reward it needs fails there, not at the goal mid-episode; an action given
+    to ``encode`` is checked (a bad one made another valid state); ``--help`` is help
+    (API audit)."""
+    doc = policy_document(_table(), cfg=Config())
+    del doc["rewards"]["goal"]
+    path = tmp_path / "p.json"
+    path.write_text(json.dumps(doc))
+    assert rt.main([str(path)]) == 2
+    assert capsys.readouterr().err == (
+        f"robot_runtime: error: {path}: rewards.goal: missing (the rewards of goal, "
+        "end_of_world, bump, stop, reverse, turn, forward)\n"
+    )
+    cfg = Config()
+    cfg.sensors.memory.goal_camera = True
+    cfg.sensors.memory.previous_action = True
+    layout = KeywordLayout(tuple(state_fields(cfg.sensors)))
+    mem_table = QTable(layout, {"sensors": sensor_signature(cfg), "episodes": 0})
+    mem_doc = policy_document(mem_table, cfg=cfg)
+    p = rt.Policy(json.loads(json.dumps(mem_doc)), "m.json")
+    m = p.new_memory()
+    p.encode([100.0] * 8, [None] * 3, [None] * 3, memory=m)
+    for bad in (9, 5, -1, 2.0, True):
+        with pytest.raises(rt.PolicyError, match=r"^action: .* is not an action \(0\.\.4"):
+            p.encode([100.0] * 8, [None] * 3, [None] * 3, memory=m, action=bad)
+    p.encode([100.0] * 8, [None] * 3, [None] * 3, memory=m, action=4)
+    assert rt.main(["--help"]) == 0
+    out, err = capsys.readouterr()
+    assert out.startswith("usage: python robot_runtime.py [--] POLICY\n") and err == ""
+    assert rt.main([]) == 2
+    assert capsys.readouterr().err.startswith("robot_runtime: error: usage: ")

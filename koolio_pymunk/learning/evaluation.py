@@ -120,17 +120,21 @@ def evaluate(
 ) -> EvalResult:
     """Run ``table``'s policy for ``episodes`` episodes without learning (module doc).
 
+    ``goal`` scores that goal of the arena (it stays ``env``'s active goal afterwards, as
+    ``reset``'s option does; ``ValueError`` for a name the arena lacks, ``random``
+    included: score each goal in turn instead); None scores ``env``'s active goal.
     ``epsilon`` 0 is the greedy policy; above 0 a uniform random action is taken with that
     probability, drawn from each episode's seeded generator. ``stop`` is asked before each
     episode; a true answer raises :class:`EvaluationStopped`.
     """
+    options = {"goal": goal} if goal else None
+    env.check_options(options)
     agent = QLearner(table, env.config.learner, None)
     loop = Episodes(env, agent, seed, EVAL_STREAM, learn=False, epsilon=epsilon)
     outcomes: list[str] = []
     steps: list[int] = []
     bumps: list[int] = []
     rewards: list[float] = []
-    options = {"goal": goal} if goal else None
     for e in range(episodes):
         if stop is not None and stop():
             raise EvaluationStopped

@@ -192,14 +192,47 @@ class KoolioEnv(gym.Env):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
-        """Start an episode; ``options`` may hold ``goal`` (a goal name) or ``heading``."""
+        """Start an episode. ``options`` may hold ``goal`` (a goal name of the arena: it
+        becomes the active goal, for this and later episodes, until another ``goal``
+        option) and ``heading`` (radians, counter-clockwise from +x; the start's own or
+        a random one otherwise); any other key, or a goal the arena lacks, is refused with
+        ``ValueError`` before anything changes."""
+        self.check_options(options)
         super().reset(seed=seed)
         self.reset_key(options)
+        if self.render_mode == "human":
+            self.render()
         return self._obs(), self._info()
 
     def step(self, action: int) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        """One step (class doc). An action outside ``Discrete(5)`` (e.g. 7, or 2.7) is
+        refused with ``ValueError`` before anything moves or any draw is made."""
+        if not self.action_space.contains(action):
+            raise ValueError(f"action: {action!r} is not an action (0..4)")
         _, reward, terminated, truncated = self.transition(int(action))
+        if self.render_mode == "human":
+            self.render()
         return self._obs(), reward, terminated, truncated, self._info()
+
+    def check_options(self, options: dict[str, Any] | None) -> None:
+        """``reset``'s options (and ``reset_key``'s, whose callers check them here):
+        known keys, a goal of this arena, a finite heading; else ``ValueError``."""
+        if not options:
+            return
+        unknown = sorted(str(k) for k in options if k not in ("goal", "heading"))
+        if unknown:
+            raise ValueError(f"options: unknown key {unknown[0]!r} (known: goal, heading)")
+        goal = options.get("goal")
+        if goal is not None and goal not in self.world_arena.goal_names():
+            raise ValueError(
+                f"options: goal: no goal named {goal!r} "
+                f"(goals: {', '.join(self.world_arena.goal_names())})"
+            )
+        heading = options.get("heading")
+        if heading is not None and not (
+            isinstance(heading, (int, float, np.number)) and math.isfinite(heading)
+        ):
+            raise ValueError(f"options: heading: a finite number of radians, got {heading!r}")
 
     def render(self) -> np.ndarray | None:
         if self.render_mode is None:

@@ -369,3 +369,43 @@ def test_a_rotated_arena_is_the_same_task(arena_name: str, world: str | None) ->
         for (obs0, r0, ev0, pose0), (obs5, r5, ev5, pose5) in zip(*runs):
             assert (obs0, r0, ev0) == (obs5, r5, ev5)
             assert pose5[:2] == pytest.approx(_rotate(pose0[:2], 5.0), abs=1e-6)
+
+
+def test_bad_actions_and_options_are_refused_before_anything_changes() -> None:
+    """An action outside Discrete(5) and a reset option the env does not know raise
+    ``ValueError`` before any draw or move (a 7 drew the sensor noise first, a 2.7 ran
+    as 2, an unknown goal was a KeyError after the realism draw: API audit)."""
+    env = KoolioEnv(config="koolio-real-dr")
+    env.reset(seed=0)
+    before = (env.np_random.bit_generator.state, env.world.pose(0), env.steps)
+    for action in (7, -1, 2.7, "3"):
+        with pytest.raises(ValueError, match=r"^action: .* is not an action \(0\.\.4\)$"):
+            env.step(action)
+    for options, words in (
+        ({"hedding": 0.0}, "unknown key 'hedding'"),
+        ({"goal": "nope"}, "goal: no goal named 'nope'"),
+        ({"heading": float("nan")}, "heading: a finite number of radians"),
+    ):
+        with pytest.raises(ValueError, match=words):
+            env.reset(options=options)
+    assert (env.np_random.bit_generator.state, env.world.pose(0), env.steps) == before
+    env.step(np.int64(3))  # numpy integers are actions
+    assert env.steps == 1
+
+
+def test_human_rendering_draws_at_every_step(monkeypatch) -> None:
+    """``render_mode="human"`` draws in ``reset`` and ``step`` (Gymnasium's rule), so a
+    window follows the robot without ``render()`` calls."""
+    monkeypatch.setenv("SDL_VIDEODRIVER", "dummy")
+    drawn = []
+    env = KoolioEnv(render_mode="human")
+    monkeypatch.setattr(env, "render", lambda: drawn.append(env.steps))
+    env.reset(seed=0)
+    env.step(3)
+    env.step(1)
+    assert drawn == [0, 1, 2]
+    plain = KoolioEnv(render_mode="rgb_array")
+    monkeypatch.setattr(plain, "render", lambda: drawn.append("rgb"))
+    plain.reset(seed=0)
+    plain.step(3)
+    assert "rgb" not in drawn  # rgb_array draws when asked
