@@ -334,9 +334,10 @@ def train(
     save_seconds: float | None = None,
     compiled: bool = True,
 ) -> TrainResult:
-    """Train for ``episodes`` more episodes, saving the table after each one (the
-    paper's rule), or every ``save_every`` episodes and/or every ``save_seconds``
-    seconds, and always at the end.
+    """Train for ``episodes`` more episodes (``koolio-pm train --episodes N`` is the
+    total the table reaches: it passes N minus the episodes already held), saving the
+    table after each one (the paper's rule), or every ``save_every`` episodes and/or
+    every ``save_seconds`` seconds, and always at the end.
 
     Ctrl-C or SIGTERM (KeyboardInterrupt) is the paper's Exit: the unfinished episode's
     updates are kept and the table saved; with ``discard_unfinished`` it is Exit Without

@@ -39,8 +39,10 @@ class KoolioEnv(gym.Env):
     """Koolio, a round delivery robot, must stop in front of an office door's number plate.
 
     **Arena.** A YAML arena (``arenas/hallway.yaml`` by default: the paper's 1632 x 88 in
-    hallway): walls, optional obstacles, named goals (one active), end-of-world markers
-    with zones, a start point. Units are inches.
+    hallway; a built-in name, a file or an :class:`~koolio_pymunk.world.arena.Arena`):
+    walls, optional obstacles, named goals (one active), end-of-world markers with zones,
+    a start point. Units are inches. ``goal`` makes another of its goals the active one;
+    ``goal="random"`` draws one per episode (the cameras see only its plate).
 
     **Action space** ``Discrete(5)``: 0 Stop, 1 RotateLeft (+``rotate_action_arc_deg``),
     2 RotateRight, 3 Forward, 4 Reverse (``move_action_distance``). pymunk resolves every
@@ -50,11 +52,16 @@ class KoolioEnv(gym.Env):
     the paper's sensors, 12 values: goal distance seen by the front, left and right cameras
     and end-of-world distance seen by the same three (0 Close < 36 in, 1 Medium < 96,
     2 Far or not seen), then six sonar values (sonars 0, 1&2 averaged, 3, 4, 5&6
-    averaged, 7; 0 Bump < 6 in, 1 Close < 24, 2 Medium < 60, 3 Far).
+    averaged, 7; 0 Bump < 6 in, 1 Close < 24, 2 Medium < 60, 3 Far); int64. With
+    ``sensors.compass.in_state`` the compass follows, and with ``sensors.memory`` the
+    memory fields (:attr:`codes`; e.g. ``paper-memory``: the camera that last saw the
+    goal, 0-3, and the previous action, 0-5: 14 values).
 
-    **Rewards** (first that applies, values in ``Config.rewards``): goal (Stop with the
-    front camera reading the goal Close) > end_of_world > bump (any sonar Bump) > stop /
-    reverse / turn / forward by action. ``info["reward_terms"]`` names them.
+    **Rewards** (first that applies, values in ``Config.rewards``; the defaults: goal 100,
+    end_of_world -100, bump -5, stop -5, reverse -10, turn -1, forward -0.5): goal (Stop
+    with the front camera reading the goal Close) > end_of_world > bump (any sonar Bump) >
+    stop / reverse / turn / forward by action. ``info["reward_terms"]`` names them (a
+    ``wrong_door`` step's reward is under ``goal``: its ``event`` tells them apart).
 
     **Episode end.** ``terminated`` at the goal or in an end-of-world zone; ``truncated``
     after ``episode.max_steps`` steps (1500 by default; 0: no cap). With the misread-plate
