@@ -42,6 +42,7 @@ class EpisodeAgreement:
     seconds: float
 
     def as_dict(self) -> dict[str, Any]:
+        """The row's fields by name (``tools/agreement.py``'s JSON)."""
         return asdict(self)
 
 

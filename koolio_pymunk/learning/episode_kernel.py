@@ -464,6 +464,7 @@ class CompiledEpisode:
                 k.codes, flags, u)  # fmt: skip
 
     def world_group(self) -> tuple:
+        """:func:`_move`'s inputs: walls, radius, move distance, turn arc, motion errors."""
         env = self.env
         m = env.motion
         motion = (0.0, 0.0, 0.0, 0.0, 0.0)

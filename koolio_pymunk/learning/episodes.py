@@ -119,13 +119,17 @@ class Agent(Protocol):
 
     epsilon: float
 
-    def begin_episode(self, episode: int, rng: np.random.Generator) -> None: ...
+    def begin_episode(self, episode: int, rng: np.random.Generator) -> None:
+        """A new episode: ``rng`` owns its exploration draws (traces reset, epsilon
+        from the schedule)."""
 
-    def act(self, state: int) -> int: ...
+    def act(self, state: int) -> int:
+        """The action in ``state`` (epsilon-greedy while learning)."""
 
     def observe(
         self, state: int, action: int, reward: float, next_state: int, terminal: bool
-    ) -> None: ...
+    ) -> None:
+        """Learn from one step (``next_state``: where the action led, before any rescue)."""
 
 
 class Episodes:

@@ -102,6 +102,7 @@ class EvalResult:
     goal: str
 
     def as_dict(self) -> dict[str, Any]:
+        """The figures by name (``koolio-pm eval --json``)."""
         return dict(self.__dict__)
 
 

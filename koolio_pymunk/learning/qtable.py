@@ -124,6 +124,7 @@ class QTable:
         return self.rows.get(key)
 
     def get(self, key: int, action: int) -> float:
+        """Q of ``(key, action)``; ``q_init`` for a state never visited (none created)."""
         r = self.rows.get(key)
         return self.q_init if r is None else r[action]
 
@@ -136,6 +137,7 @@ class QTable:
         return len(self.rows) * (8 + 8 * self.layout.n_actions)
 
     def copy(self) -> QTable:
+        """A deep copy: rows, header and sections are this table's no longer."""
         return QTable(
             self.layout,
             dict(self.meta),
@@ -146,6 +148,7 @@ class QTable:
 
     # -- bytes ----------------------------------------------------------------------
     def to_bytes(self) -> bytes:
+        """The ``.qtable`` file's bytes (:meth:`from_bytes` reads them back exactly)."""
         header = dict(self.meta)
         header.update(format=FORMAT_VERSION, layout=self.layout.to_json(), q_init=self.q_init)
         blobs = [(name, bytes(self.sections[name])) for name in sorted(self.sections)]
@@ -349,6 +352,7 @@ def _check_codes(keys: np.ndarray, layout: KeywordLayout, source: str) -> None:
 
 
 def backup_path(path: Path) -> Path:
+    """The backup beside a table: ``X.qtable`` -> ``X.qtable.bak``."""
     return path.with_name(path.name + ".bak")
 
 

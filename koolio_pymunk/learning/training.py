@@ -89,6 +89,7 @@ class Progress:
     started: float = field(default_factory=time.perf_counter)
 
     def add(self, r: EpisodeResult) -> None:
+        """Count a finished episode."""
         self.episodes += 1
         self.goals += r.outcome == "goal"
         self.steps += r.steps
@@ -96,13 +97,16 @@ class Progress:
 
     @property
     def goal_rate(self) -> float:
+        """The share of the recent episodes (a moving window) at the goal."""
         return sum(self.recent) / len(self.recent) if self.recent else 0.0
 
     @property
     def steps_per_s(self) -> float:
+        """Steps per wall-clock second since this counter started."""
         return self.steps / max(1e-9, time.perf_counter() - self.started)
 
     def line(self, episode: int, total: int, epsilon: float) -> str:
+        """The progress line printed every few seconds."""
         return (
             f"episode {episode:>6}/{total}  goal rate (last {len(self.recent)}) "
             f"{self.goal_rate:6.1%}  steps/s {self.steps_per_s:8.0f}  epsilon {epsilon:.3f}"

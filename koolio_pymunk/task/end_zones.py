@@ -40,6 +40,7 @@ class EndZones:
         even number of crossings), so the exact test runs only near a zone."""
 
     def contains(self, x: float, y: float) -> bool:
+        """``(x, y)`` is inside an end-of-world zone (class doc: a boundary is outside)."""
         for cx, cy in self.discs:
             if math.hypot(x - cx, y - cy) <= self.disc_radius:
                 return True

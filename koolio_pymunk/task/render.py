@@ -103,6 +103,8 @@ class ArenaLayer:
         robot_radius: float = 10.0,
         label_size: int = 16,
     ) -> None:
+        """Copy the part of the arena ``camera`` sees onto ``surface`` (rebuilt first when
+        the zoom, the labels or the arena changed)."""
         key = (camera.zoom, labels, robot_radius, label_size)
         if key != self._key or arena is not self._arena:
             self._build(arena, camera.zoom, key)
@@ -149,15 +151,18 @@ class ArenaLayer:
 
 
 def arena_bounds(env: KoolioEnv) -> tuple[float, float, float, float]:
+    """``(xmin, ymin, xmax, ymax)`` of the arena the env runs in, inches."""
     return env.world_arena.bounds()
 
 
 def is_long(bounds: tuple[float, float, float, float]) -> bool:
+    """A hallway-like arena, much longer than wide (drawn with an overview strip)."""
     xmin, ymin, xmax, ymax = bounds
     return (ymax - ymin) / max(1e-9, xmax - xmin) < LONG_ARENA
 
 
 def status_line(env: KoolioEnv) -> str:
+    """The frame's one status line: goal, reward, steps, bumps, the last action and event."""
     j = env.judgement
     last = (
         f"{ACTION_NAMES[env.last_action]} -> {j.event}"
@@ -241,6 +246,7 @@ class EnvRenderer:
         raise ValueError(f"render mode {mode!r} is not supported (human, rgb_array)")
 
     def close(self) -> None:
+        """Close the window, if one was opened (``human`` mode)."""
         if self._window is not None:
             pygame.display.quit()
             self._window = None
