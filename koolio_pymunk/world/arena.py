@@ -482,6 +482,13 @@ def parse_arena(
     if data is None:
         _fail(source, "", "empty file (expected a mapping with name, walls, goals, ...)")
     data = mapping_of(data, source, "", "expected keys name, walls, goals, end_of_world, start")
+    if "hallway" in data and "doors" in data and "walls" not in data:
+        _fail(
+            source,
+            "",
+            "a door table, not an arena (koolio-pm edit --doors FILE or tools/make_hallway.py "
+            "makes an arena of it; the built-in hallway is --arena hallway)",
+        )
     check_keys(data, TOP_KEYS, REQUIRED_TOP_KEYS, source, "")
     arena = Arena(
         name=_parse_name(data, source),

@@ -548,3 +548,14 @@ def test_an_arena_without_end_of_world_markers_is_valid(
     """The paper: "any number" of end-of-world markers; none makes a closed room."""
     arena = load_arena(write(tmp_path, variant(change)))
     assert arena.end_of_world == ()
+
+
+def test_a_door_table_given_as_an_arena_says_what_it_is() -> None:
+    """``--arena hallway_doors`` is the hallway's door table: one line saying so and how
+    to make an arena of it (it was an unknown key 'hallway': API audit)."""
+    with pytest.raises(ArenaError) as info:
+        arena_mod.load_arena("hallway_doors")
+    assert str(info.value).endswith(
+        "hallway_doors.yaml: a door table, not an arena (koolio-pm edit --doors FILE or "
+        "tools/make_hallway.py makes an arena of it; the built-in hallway is --arena hallway)"
+    )
