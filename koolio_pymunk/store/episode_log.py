@@ -220,7 +220,17 @@ def _check_appendable(p: Path) -> None:
             located(str(p), "", f"cannot create the folder {p.parent}: a file is in the way")
         )
     if not os.access(folder, os.W_OK | os.X_OK):
-        raise FileError(located(str(p), "", f"cannot write: permission denied ({folder})"))
+        why = "read-only file system" if _read_only(folder) else "permission denied"
+        raise FileError(located(str(p), "", f"cannot write: {why} ({folder})"))
+
+
+def _read_only(folder: Path) -> bool:
+    """``folder`` is on a file system mounted read-only (what a write would say: EROFS,
+    not EACCES; False where that cannot be asked)."""
+    try:
+        return bool(os.statvfs(folder).f_flag & os.ST_RDONLY)
+    except (AttributeError, OSError):  # no statvfs (Windows), or unreachable
+        return False
 
 
 def _check_rows(p: Path, text: str) -> None:

@@ -4,6 +4,7 @@ row is one line naming it, in ``train``, ``view`` and ``plot`` alike (issue #21)
 
 from __future__ import annotations
 
+import os
 import shutil
 from pathlib import Path
 
@@ -154,3 +155,24 @@ def test_a_log_that_cannot_take_its_first_row_is_refused_before_anything(work, c
     expect_error(capsys, work, argv, "n.csv: is a link to a missing file (nowhere/at/all)")
     argv[-1] = "tiny.yaml/n.csv"
     expect_error(capsys, work, argv, "cannot create the folder tiny.yaml: a file is in the way")
+
+
+@pytest.mark.skipif(not hasattr(os, "statvfs"), reason="POSIX statvfs")
+def test_a_read_only_file_system_is_named_as_such(tmp_path, monkeypatch):
+    """A new log in a folder that cannot be written: "read-only file system" when the
+    folder's file system is mounted read-only (as ``export`` says it), "permission
+    denied" otherwise (both read "permission denied" before: newcomer audit)."""
+    from koolio_pymunk.store.episode_log import check_log_path
+    from koolio_pymunk.store.errors import FileError
+
+    monkeypatch.setattr(os, "access", lambda *a, **k: False)
+    with pytest.raises(FileError, match=r"new\.csv: cannot write: permission denied \("):
+        check_log_path(tmp_path / "new.csv", extra_fields=())
+    real = os.statvfs(tmp_path)
+
+    class ReadOnly:
+        f_flag = real.f_flag | os.ST_RDONLY
+
+    monkeypatch.setattr(os, "statvfs", lambda p: ReadOnly())
+    with pytest.raises(FileError, match=r"new\.csv: cannot write: read-only file system \("):
+        check_log_path(tmp_path / "new.csv", extra_fields=())
