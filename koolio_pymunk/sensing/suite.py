@@ -144,7 +144,7 @@ class SensorSuite:
         self.ray_offsets = sonar_ray_offsets(so.sonar_sensors_deg, so.sonar_arc_deg, so.sub_arcs)
         self.ray_units = unit_vectors(self.ray_offsets)
         """The rays' offsets as unit vectors, turned by the heading at each reading
-        (:func:`~.ray_engines.turned`)."""
+        (:func:`turned`)."""
         self.ray_length = so.max_range + self.radius
         self.camera_dirs = np.radians(ca.camera_sensors_deg)
         self.camera_half_arc = math.radians(ca.camera_arc_deg) / 2.0

@@ -11,7 +11,7 @@ and a table learned in the ideal world never resumes quietly in a realistic one
 1. realism off: ``ideal`` (the table records nothing);
 2. ``--world W`` that decides the realism alone (the configuration's own realism is off,
    or W lays the same realism over it as over the defaults): W's name, as it always was;
-3. realism equal to a shipped profile's (``--config koolio-real`` and ``--world
+3. realism equal to a shipped world profile's (``--config koolio-real`` and ``--world
    koolio-real`` are one world): the profile's name;
 4. any other realism (a configuration file's own, a world over it that changes only part
    of it, a sweep's grid, a ``Config`` built in Python): ``realism-`` and 8 hex digits of
@@ -31,7 +31,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from .config import Config, apply_world, load_config, profile_names
+from .config import Config, apply_world, load_config, world_names
 from .errors import KoolioError
 from .realism_config import RealismConfig, realism_on
 
@@ -101,9 +101,10 @@ def _world_alone(world: str | Path) -> RealismConfig:
 
 @functools.lru_cache(maxsize=1)
 def _profile_worlds() -> tuple[tuple[str, dict[str, Any]], ...]:
-    """The shipped profiles that turn realism on, with their realism (read once)."""
+    """The shipped worlds (:func:`~.config.world_names`) that turn realism on, with their
+    realism (read once)."""
     out = []
-    for name in profile_names():
+    for name in world_names():
         try:
             realism = load_config(name).realism
         except KoolioError:  # an unreadable profile names no world

@@ -138,7 +138,7 @@ class KoolioEnv(gym.Env):
         cfg = apply_world(own, world) if world is not None else own
         self.world_name = world_name(cfg, world, own.realism)
         """The world the env runs in, however its realism was turned on: ``ideal``, the
-        world laid over the configuration (``--world``), a shipped profile's name, or
+        world laid over the configuration (``--world``), a shipped world profile's name, or
         ``realism-`` and a hash of other realism
         (:func:`~koolio_pymunk.store.worlds.world_name`); a table learned here records it."""
         self.config = cfg
