@@ -117,6 +117,10 @@ class KoolioEnv(gym.Env):
 
     All randomness (start headings, sensor noise, realism, rescues) comes from
     ``self.np_random``, seeded by ``reset(seed=...)``.
+
+    **Copies.** An env pickles and copies (:mod:`pickle`, :func:`copy.deepcopy`) with its
+    generator, pose, counters and memory; the copy continues exactly as the original
+    would. The window is not copied: a copy opens its own at its first render.
     """
 
     metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 30}
@@ -253,6 +257,14 @@ class KoolioEnv(gym.Env):
 
             self._renderer = EnvRenderer(self)
         return self._renderer.render(self.render_mode)
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Everything but the window: a copy (:func:`copy.deepcopy`, :mod:`pickle`, a
+        vector env's worker) continues exactly as the original would, generators and
+        learned memory included, and opens its own window at its first render."""
+        state = self.__dict__.copy()
+        state["_renderer"] = None
+        return state
 
     def close(self) -> None:
         if self._renderer is not None:

@@ -202,6 +202,15 @@ class _Chipmunk:
         except (ImportError, AttributeError):  # pragma: no cover - other pymunk layouts
             self.lib = None
 
+    def __getstate__(self) -> tuple:
+        """The spaces only: the C handles are made again on unpickling (pymunk pickles
+        its spaces; a cffi struct does not pickle), so a world copies with
+        :func:`copy.deepcopy` and :mod:`pickle`."""
+        return (self.space, self.motion)
+
+    def __setstate__(self, state: tuple) -> None:
+        self.__init__(*state)
+
     def first(self, k: int, x: float, y: float, ex: float, ey: float) -> tuple[float, float, float]:
         """``cpSpaceSegmentQueryFirst`` from ``(x, y)`` to ``(ex, ey)``, radius 0, in the
         motion space of copy ``k``: ``(alpha, nx, ny)``, ``(1.0, 0.0, 0.0)`` if none."""

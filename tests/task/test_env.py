@@ -409,3 +409,36 @@ def test_human_rendering_draws_at_every_step(monkeypatch) -> None:
     plain.reset(seed=0)
     plain.step(3)
     assert "rgb" not in drawn  # rgb_array draws when asked
+
+
+@pytest.mark.parametrize("world", [None, "koolio-real"])
+@pytest.mark.parametrize("how", ["pickle", "deepcopy"])
+def test_a_copy_continues_exactly_as_the_original(world: str | None, how: str) -> None:
+    import copy
+    import pickle
+
+    env = KoolioEnv("hallway", world=world)
+    env.reset(seed=3)
+    for a in [0, 1, 0, 0, 2, 0, 3]:
+        env.step(a)
+    twin = pickle.loads(pickle.dumps(env)) if how == "pickle" else copy.deepcopy(env)
+    actions = [0, 0, 1, 0, 4, 2, 0, 0, 3, 0, 0, 0]
+    ours = [env.step(a) for a in actions]
+    theirs = [twin.step(a) for a in actions]
+    for (o1, r1, t1, u1, i1), (o2, r2, t2, u2, i2) in zip(ours, theirs, strict=True):
+        assert np.array_equal(o1, o2) and (r1, t1, u1) == (r2, t2, u2)
+        assert i1["keyword"] == i2["keyword"] and i1["reward_terms"] == i2["reward_terms"]
+    assert env.world.pose(0) == twin.world.pose(0)
+    assert twin.world is not env.world
+
+
+def test_a_rendered_env_pickles_without_its_window() -> None:
+    import pickle
+
+    pytest.importorskip("pygame")
+    env = KoolioEnv("hallway", render_mode="rgb_array")
+    env.reset(seed=0)
+    picture = env.render()
+    twin = pickle.loads(pickle.dumps(env))
+    assert twin._renderer is None and env._renderer is not None
+    assert np.array_equal(twin.render(), picture)
