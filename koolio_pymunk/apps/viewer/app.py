@@ -385,7 +385,7 @@ class Layout:
             overview = (0, 0, left, oh)
             top = oh
         hud_h = st.head_h + (hud_rows + 2) * st.row_h + st.px(33) + st.pad
-        bottom_h = min(round(h * 0.45), max(hud_h, st.px(290)))
+        bottom_h = min(round(h * 0.5), max(hud_h, st.px(290)))  # a long state: up to half
         main = (0, top, left, h - top - bottom_h)
         y = h - bottom_h
         hud_w = max(st.px(372), round(left * 0.34))
@@ -524,8 +524,7 @@ class ViewerApp:
         """Lay the window out with the control panel docked or floating, and build it."""
         from ...task.viewport import Camera
 
-        s = self.env.sensors
-        rows = 2 * s.n_camera + len(s.groups) + int(s.cfg.compass.in_state)
+        rows = len(self.env.layout.bits)  # a HUD row per state field, memory included
         self.layout = Layout.compute(
             self.size, self.bounds, self.style, docked=not floating, hud_rows=rows
         )

@@ -252,21 +252,22 @@ def memory_rows(env: KoolioEnv) -> list[HudRow]:
     cam = env.sensors.cfg.camera.camera_sensors_deg
     rows: list[HudRow] = []
 
-    def camera(value: int) -> str:
-        return "none" if value == 0 else f"cam {value - 1} ({_deg(cam[value - 1])})"
+    def camera(name: str, value: int, what: str) -> HudRow:
+        """The camera that last saw it: its number as the level, its angle beside."""
+        if value == 0:
+            return HudRow(name, "", "none", what)
+        return HudRow(name, _deg(cam[value - 1]), f"cam {value - 1}", what)
 
     if cfg.goal_camera:
-        rows.append(HudRow("GoalMemory", "", camera(mem.goal), "last saw the goal"))
+        rows.append(camera("GoalMemory", mem.goal, "last saw the goal"))
     if cfg.eow_camera:
-        rows.append(HudRow("EoWMemory", "", camera(mem.eow), "last saw the end"))
+        rows.append(camera("EoWMemory", mem.eow, "last saw the end"))
     if cfg.previous_action:
         last = "none" if mem.action == 0 else ACTION_NAMES[mem.action - 1]
         rows.append(HudRow("LastAction", "", last, ""))
     if cfg.goal_bearing:
-        where = BEARINGS[mem.bearing]
-        if mem.bearing:
-            where += f" ({mem.bearing_mdeg / 1000:+.0f} deg)"
-        rows.append(HudRow("GoalBearing", "", where, "goal, dead reckoned"))
+        angle = _deg(mem.bearing_mdeg / 1000) if mem.bearing else ""
+        rows.append(HudRow("GoalBearing", angle, BEARINGS[mem.bearing], "dead reckoned"))
     return rows
 
 
@@ -315,38 +316,64 @@ def draw_hud(
     surface: pygame.Surface, rect: pygame.Rect, env: KoolioEnv, st: Style = PLAIN
 ) -> dict[str, object]:
     """Show HUD: every encoded reading by name, its level and distance; the Bump flag
-    naming the sonar that bumped, and that sonar marked in its row."""
+    naming the sonar that bumped, and that sonar marked in its row.
+
+    The rows close up when a long state (memory fields, a compass) would push the lines
+    below them out of the panel: a row is :attr:`Style.row_h` high, or less, down to
+    :func:`min_row_step`; if that is not enough, the compass line (not in the state) is
+    left out, so that the last action's line stays in view."""
     clip = surface.get_clip()
     surface.set_clip(rect)
     inner = panel(surface, rect, "HUD: encoded readings", st)
     cols = _hud_columns(inner.x, st)
+    rows = hud_rows(env)
+    below = st.px(5) + st.px(24) + st.px(4) + 2 * st.row_h  # the flag and two lines
+    show_compass = len(rows) * min_row_step(st) + below <= inner.h
+    if not show_compass:
+        below -= st.row_h
+    step = max(min_row_step(st), min(st.row_h, (inner.h - below) // max(1, len(rows))))
     y = inner.y
     marks: dict[int, pygame.Rect] = {}
     flags: dict[str, pygame.Rect] = {}
-    for row in hud_rows(env):
-        mark = _hud_row(surface, row, cols, y, st)
+    for row in rows:
+        mark = _hud_row(surface, row, cols, y, st, step)
         if mark is not None:
             marks.update(dict.fromkeys(row.bumped, mark))
         x = max(cols[4], cols[3] + text(row.distance, st.row, DIM).get_width() + st.px(6))
         x = x if mark is None else mark.right + st.px(4)
         for word in row.flags:
-            flags[row.name] = _flag_mark(surface, word, x, y, st)
+            flags[row.name] = _flag_mark(surface, word, x, y, st, step)
             x = flags[row.name].right + st.px(4)
-        y += st.row_h
+        y += step
     flag = _bump_flag(surface, env, inner.x, y + st.px(5), st)
     compass = env.readings.compass
     line = f"compass {COMPASS_LEVELS[compass_code(compass)]} ({compass:.0f}/256), not in the state"
     y = flag.bottom + st.px(4)
-    surface.blit(text(line, st.small, DIM), (inner.x, y))
-    y += st.row_h
+    if show_compass:
+        surface.blit(text(line, st.small, DIM), (inner.x, y))
+        y += st.row_h
     j = env.judgement
     if j is not None and env.last_action is not None:
         last = f"last: {ACTION_NAMES[env.last_action]} -> {j.event} ({j.reward:+g})"
     else:
         last = "last: (episode start)"
-    surface.blit(text(last, st.row, INK), (inner.x, y))
+    shown = text(last, st.row, INK)
+    surface.blit(shown, (inner.x, y))
     surface.set_clip(clip)
-    return {"panel": rect, "bump_flag": flag, "bump_marks": marks, "flag_marks": flags}
+    return {
+        "panel": rect,
+        "bump_flag": flag,
+        "bump_marks": marks,
+        "flag_marks": flags,
+        "row_step": step,
+        "compass_line": show_compass,
+        "last_line": shown.get_rect(topleft=(inner.x, y)),
+    }
+
+
+def min_row_step(st: Style) -> int:
+    """The closest the HUD's rows come together: the height of a row's text."""
+    return st.px(15)
 
 
 def _hud_columns(x0: int, st: Style) -> tuple[int, int, int, int, int]:
@@ -358,29 +385,36 @@ def _hud_columns(x0: int, st: Style) -> tuple[int, int, int, int, int]:
 
 
 def _hud_row(
-    surface: pygame.Surface, row: HudRow, cols: tuple[int, ...], y: int, st: Style
+    surface: pygame.Surface, row: HudRow, cols: tuple[int, ...], y: int, st: Style, step: int
 ) -> pygame.Rect | None:
     x_name, x_ang, x_level, x_dist, x_mark = cols
-    ty = y - st.px(1)
-    surface.blit(text(row.name, st.row, INK), (x_name, ty))
+    ty = y - st.px(1) - (st.row_h - step) // 2
+    name = text(row.name, st.row, INK)
+    surface.blit(name, (x_name, ty))
+    x_ang = max(x_ang, x_name + name.get_width() + st.px(4))  # a long name (EoWMemory)
     surface.blit(text(row.angles, st.small, DIM), (x_ang, ty + st.px(1)))
-    cell = pygame.Rect(x_level - st.px(3), y, st.px(60), st.row_h - 1)
+    level = text(row.level, st.row, INK)  # a memory's level may be wider than the column
+    cell = pygame.Rect(
+        x_level - st.px(3), y, max(st.px(60), level.get_width() + st.px(6)), step - 1
+    )
     pygame.draw.rect(surface, LEVEL_COLOURS.get(row.level, PANEL_BG), cell)
-    surface.blit(text(row.level, st.row, INK), (x_level, ty))
-    surface.blit(text(row.distance, st.row, DIM), (x_dist, ty))
+    surface.blit(level, (x_level, ty))
+    surface.blit(text(row.distance, st.row, DIM), (max(x_dist, cell.right + st.px(6)), ty))
     if not row.bumped:
         return None
     label = text("bump: " + ",".join(str(k) for k in row.bumped), st.small, INK)
-    mark = pygame.Rect(x_mark, y, label.get_width() + st.px(8), st.row_h - 1)
+    mark = pygame.Rect(x_mark, y, label.get_width() + st.px(8), step - 1)
     pygame.draw.rect(surface, BUMP_ON, mark, border_radius=3)
     surface.blit(label, label.get_rect(center=mark.center))
     return mark
 
 
-def _flag_mark(surface: pygame.Surface, flag: str, x: int, y: int, st: Style) -> pygame.Rect:
+def _flag_mark(
+    surface: pygame.Surface, flag: str, x: int, y: int, st: Style, step: int
+) -> pygame.Rect:
     """A realism mark (``misread``, ``missed``, ``no echo``) in its colour at ``x``."""
     label = text(flag, st.small, INK)
-    mark = pygame.Rect(x, y, label.get_width() + st.px(8), st.row_h - 1)
+    mark = pygame.Rect(x, y, label.get_width() + st.px(8), step - 1)
     colour = FLAG_COLOURS[flag]
     pygame.draw.rect(surface, colour, mark, border_radius=3)
     surface.blit(label, label.get_rect(center=mark.center))
@@ -539,20 +573,25 @@ def draw_curve(
     clip = surface.get_clip()
     surface.set_clip(rect)
     inner = panel(surface, rect, "Learning curve", st)
-    left, right = st.px(46), st.px(38)
-    legend_h = 2 * st.row_h + st.px(2)
+    # room on the left for the return ticks and the x axis's caption beside them
+    left = max(st.px(46), text("episode", st.small, DIM).get_width() + st.px(8))
+    right = st.px(38)
+    plot_w = inner.w - left - right
+    legend_h = len(_legend_rows(plot_w, st, window)) * st.row_h + st.px(2)
     plot = pygame.Rect(
-        inner.x + left,
-        inner.y + st.px(6),
-        inner.w - left - right,
-        inner.h - legend_h - st.row_h - st.px(10),
+        inner.x + left, inner.y + st.px(6), plot_w, inner.h - legend_h - st.row_h - st.px(10)
     )
     pygame.draw.rect(surface, (255, 255, 255), plot)
     n = len(returns)
     out: dict[str, object] = {"panel": rect, "plot": plot}
     if n == 0:
-        msg = text("no finished episode yet", st.row, DIM)
-        surface.blit(msg, msg.get_rect(center=plot.center))
+        words = ["no finished episode yet"]
+        if text(words[0], st.row, DIM).get_width() > plot.w - st.px(8):  # a narrow plot
+            words = ["no finished", "episode yet"]
+        for k, line in enumerate(words):
+            msg = text(line, st.row, DIM)
+            dy = round((k - (len(words) - 1) / 2) * st.row_h)
+            surface.blit(msg, msg.get_rect(center=(plot.centerx, plot.centery + dy)))
         ax = _Axes(plot, 1, -1.0, 1.0)
     else:
         avg = moving_average(returns, window)
@@ -608,28 +647,42 @@ def _axis_labels(surface: pygame.Surface, ax: _Axes, st: Style, n: int, goal: bo
             pygame.draw.line(surface, CURVE_GOAL, (plot.right, yy), (plot.right + st.px(3), yy))
             lab = text(f"{pct}%", st.small, CURVE_GOAL)
             surface.blit(lab, (plot.right + st.px(5), yy - lab.get_height() // 2))
-    cap = text("episode", st.small, DIM)
-    surface.blit(cap, (plot.x - cap.get_width() - st.px(4), plot.bottom + st.px(3)))
+    cap = text("episode", st.small, DIM)  # clear of the first tick's label, at plot.x
+    surface.blit(cap, (plot.x - cap.get_width() - st.px(7), plot.bottom + st.px(3)))
     return ticks
+
+
+def _legend_rows(plot_w: int, st: Style, window: int) -> list[list[tuple]]:
+    """The legend's items ``(colour, width, label image, x offset)``, row by row as
+    they fit under a plot ``plot_w`` wide (and into its right axis's margin)."""
+    items = [  # a long label and the short one of a narrow plot
+        (CURVE_RETURN, 2, "return per episode", "return"),
+        (CURVE_AVERAGE, 3, f"moving average ({window})", f"average ({window})"),
+        (CURVE_GOAL, 2, f"at the goal, % of last {window} (right axis)", "% at the goal (right)"),
+    ]
+    rows: list[list[tuple]] = [[]]
+    x = 0
+    for colour, width, label, short in items:
+        img = text(label, st.small, INK)
+        if st.px(34) + img.get_width() > plot_w + st.px(36):
+            img = text(short, st.small, INK)
+        w = st.px(22) + img.get_width() + st.px(12)
+        if x + w > plot_w + st.px(36) and x > 0:
+            rows.append([])
+            x = 0
+        rows[-1].append((colour, width, img, x))
+        x += w
+    return rows
 
 
 def _legend(surface: pygame.Surface, plot: pygame.Rect, st: Style, window: int) -> None:
     y = plot.bottom + st.row_h + st.px(6)
-    items = [
-        (CURVE_RETURN, 2, "return per episode"),
-        (CURVE_AVERAGE, 3, f"moving average ({window})"),
-        (CURVE_GOAL, 2, f"at the goal, % of last {window} (right axis)"),
-    ]
-    x = plot.x
-    for colour, width, label in items:
-        img = text(label, st.small, INK)
-        w = st.px(22) + img.get_width() + st.px(12)
-        if x + w > plot.right + st.px(36) and x > plot.x:
-            x, y = plot.x, y + st.row_h
-        mid = y + img.get_height() // 2
-        pygame.draw.line(surface, colour, (x, mid), (x + st.px(18), mid), st.px(width))
-        surface.blit(img, (x + st.px(22), y))
-        x += w
+    for row in _legend_rows(plot.w, st, window):
+        for colour, width, img, dx in row:
+            x, mid = plot.x + dx, y + img.get_height() // 2
+            pygame.draw.line(surface, colour, (x, mid), (x + st.px(18), mid), st.px(width))
+            surface.blit(img, (x + st.px(22), y))
+        y += st.row_h
 
 
 def _run_start(surface: pygame.Surface, ax: _Axes, run_start: int) -> None:

@@ -6,6 +6,7 @@ robot without Show Sensors."""
 
 from __future__ import annotations
 
+import json
 import math
 import os
 
@@ -298,7 +299,8 @@ def test_curve_ticks_on_both_axes() -> None:
     returns = [float(v) for v in np.linspace(-500, 100, 1501)]
     surf, drawn = _curve(returns, [False] * 1501, size=(500, 320))
     plot = drawn["plot"]
-    assert drawn["x_ticks"] == [200.0 * k for k in range(1, 8)]  # 400 px wide: 7 ticks
+    assert plot.w == 388  # the panel less the tick labels and the axis caption
+    assert drawn["x_ticks"] == [250.0 * k for k in range(1, 7)]  # 388 // 56: at most 6 ticks
     assert drawn["y_ticks"][0] >= drawn["y_range"][0] and drawn["y_ticks"][-1] <= 100
     assert len(drawn["y_ticks"]) >= 4
     for e in drawn["x_ticks"]:  # a tick mark under the plot at each one
@@ -322,3 +324,29 @@ def test_live_curve_reads_goal_history_from_the_log(tmp_path, config) -> None:
     app = make_app(tmp_path, config)
     st = app.session.stats
     assert len(st.returns) == len(st.at_goal) == 3 and st.run_start == 3
+
+
+@pytest.mark.parametrize("size", [(1280, 800), (1080, 700), (1920, 1080)])
+@pytest.mark.parametrize("memory", [{}, {"goal_camera": True, "previous_action": True}, "all"])
+def test_the_hud_shows_every_state_field_and_its_last_line(tmp_path, size, memory) -> None:
+    """Memory fields lengthen the HUD: the window makes its panel taller, and where the
+    window is too small the rows close up (and the compass line, not in the state, goes),
+    never pushing a row or the last action's line out of the panel."""
+    if memory == "all":
+        memory = {"goal_camera": True, "eow_camera": True, "previous_action": True}
+        memory |= {"goal_bearing": True}
+    longest = "eow_camera" in memory  # and the compass in the state: 17 rows
+    cfg = {"sensors": {"memory": memory, "compass": {"in_state": longest}}}
+    path = tmp_path / "mem.yaml"
+    path.write_text(json.dumps(cfg))
+    app = make_app(tmp_path, str(path), size=size)
+    for _ in range(3):
+        app.session.step()
+    app.draw()
+    drawn = app.drawn["hud"]
+    panel = drawn["panel"]
+    assert len(hud.hud_rows(app.env)) == len(app.env.layout.bits)
+    assert panel.contains(drawn["last_line"]) and panel.contains(drawn["bump_flag"])
+    assert drawn["row_step"] >= hud.min_row_step(app.style)
+    if size != (1080, 700) and not longest:  # every row at full height, the compass line too
+        assert drawn["row_step"] == app.style.row_h and drawn["compass_line"]
