@@ -128,6 +128,7 @@ def test_rescues_and_truncations_happen_in_the_compared_runs():
         (None, None, QLAMBDA),
         ("paper-memory", None, {}),
         ("paper-memory", "koolio-real", {}),  # three pings per sonar
+        ("paper-memory-qlambda", None, {}),  # Q(lambda) over the goal's bearing, forgetting
     ],
 )
 def test_train_writes_the_same_files_compiled_and_in_python(tmp_path, name, world, overrides):

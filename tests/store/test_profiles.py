@@ -36,6 +36,29 @@ def test_paper_memory_profile_is_the_paper_plus_memory() -> None:
     assert mem == paper
 
 
+def test_paper_memory_qlambda_profile_is_paper_memory_with_its_memory_and_learner() -> None:
+    """``paper-memory-qlambda`` differs from ``paper-memory`` in the memory (the goal's
+    bearing too, sightings forgotten after 60 steps) and the learner (Q(lambda), alpha
+    0.07) only."""
+    mem, lam = load_config("paper-memory"), load_config("paper-memory-qlambda")
+    m = lam.sensors.memory
+    assert m.goal_camera and m.previous_action and m.goal_bearing and m.forget_after == 60
+    assert not m.eow_camera
+    assert [name for name, _ in state_fields(lam.sensors)][-3:] == [
+        "GoalMemory",
+        "LastAction",
+        "GoalBearing",
+    ]
+    assert (lam.learner.algorithm, lam.learner.alpha, lam.learner.trace_decay) == (
+        "qlambda",
+        0.07,
+        0.9,
+    )
+    lam.sensors.memory = mem.sensors.memory
+    lam.learner.algorithm, lam.learner.alpha = mem.learner.algorithm, mem.learner.alpha
+    assert lam == mem
+
+
 def test_unknown_profile_is_one_line_error() -> None:
     with pytest.raises(
         ConfigError, match=r"^--config: papr: no such profile \(did you mean 'paper'\?\)"
