@@ -29,6 +29,7 @@ the goal rates of the kept best table and of the last table on a fresh evaluatio
 
     nice .venv/bin/python tools/learning_targets.py default --set learner.algorithm=qlambda
     nice .venv/bin/python tools/learning_targets.py paper --set learner.algorithm=dyna
+    nice .venv/bin/python tools/learning_targets.py paper --config paper-memory-qlambda  # met
     nice .venv/bin/python tools/learning_targets.py random --workers 2 --out random.json
 
 ``--set KEY=VALUE`` (repeatable; VALUE is YAML) overrides the target's configuration;
