@@ -370,7 +370,7 @@ class Layout:
         """Arena views on the left (overview on top for a long arena), panels below, the
         control panel on the right (unless it floats: then the views take the width).
         ``st`` scales the panels; ``hud_rows`` is the number of state fields."""
-        from .hud import PLAIN
+        from .hud import PLAIN, hud_height
 
         st = st or PLAIN
         w, h = size
@@ -384,7 +384,7 @@ class Layout:
             oh = min(max(st.px(70), round(left * aspect * 1.06) + 8), round(h * 0.22))
             overview = (0, 0, left, oh)
             top = oh
-        hud_h = st.head_h + (hud_rows + 2) * st.row_h + st.px(33) + st.pad
+        hud_h = hud_height(hud_rows, st)
         bottom_h = min(round(h * 0.5), max(hud_h, st.px(290)))  # a long state: up to half
         main = (0, top, left, h - top - bottom_h)
         y = h - bottom_h

@@ -327,7 +327,7 @@ def draw_hud(
     inner = panel(surface, rect, "HUD: encoded readings", st)
     cols = _hud_columns(inner.x, st)
     rows = hud_rows(env)
-    below = st.px(5) + st.px(24) + st.px(4) + 2 * st.row_h  # the flag and two lines
+    below = _below_rows(st)
     show_compass = len(rows) * min_row_step(st) + below <= inner.h
     if not show_compass:
         below -= st.row_h
@@ -369,6 +369,17 @@ def draw_hud(
         "compass_line": show_compass,
         "last_line": shown.get_rect(topleft=(inner.x, y)),
     }
+
+
+def hud_height(n_rows: int, st: Style) -> int:
+    """The HUD panel's height that shows ``n_rows`` state fields at full row height, the
+    lines below them included (what the window gives it when it can)."""
+    return st.head_h + n_rows * st.row_h + _below_rows(st) + st.pad
+
+
+def _below_rows(st: Style) -> int:
+    """The height under the HUD's rows: the Bump flag, the compass and last-action lines."""
+    return st.px(5) + st.px(24) + st.px(4) + 2 * st.row_h
 
 
 def min_row_step(st: Style) -> int:
