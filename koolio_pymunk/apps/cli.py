@@ -26,6 +26,7 @@ from typing import NoReturn
 
 from .. import __version__
 from ..store.errors import KoolioError, located
+from ..store.interrupts import exit_status
 from .flags import MAX_EPISODES, episodes_type, float_type, int_type
 from .flags import seed_type as seed_type
 
@@ -97,13 +98,19 @@ def did_you_mean(words: Sequence[str], parser: argparse.ArgumentParser) -> str:
     for word in words:
         if not word.startswith("--"):
             continue
-        close = difflib.get_close_matches(word.split("=", 1)[0], flags, n=1, cutoff=0.6)
+        name = word.split("=", 1)[0]
+        started = [f for f in flags if f.startswith(name)]
+        if len(started) == 1:  # a flag cut short: --epi -> --episodes
+            return f"; did you mean {started[0]}?"
+        close = difflib.get_close_matches(name, flags, n=1, cutoff=0.6)
         if close:
             return f"; did you mean {close[0]}?"
     return ""
 
 
-def add_env_args(p: argparse.ArgumentParser) -> None:
+def add_env_args(p: argparse.ArgumentParser, every_goal: bool = False) -> None:
+    """``--arena``, ``--config``, ``--world``, ``--goal`` and ``--seed``; ``every_goal``:
+    ``--goal all`` is taken too (``eval``: a table per door)."""
     p.add_argument(
         "--arena", default="hallway", help="arena file or built-in name (hallway, room, obstacles)"
     )
@@ -116,7 +123,8 @@ def add_env_args(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--goal",
         default=None,
-        help="goal name (default: the arena's active goal); 'random': a random goal per episode",
+        help="goal name (default: the arena's active goal); 'random': a random goal per episode"
+        + ("; 'all': each goal in turn, a row per door" if every_goal else ""),
     )
     p.add_argument("--seed", type=seed_type, default=0, help="run seed, 0..2**63-1 (default 0)")
 
@@ -127,7 +135,7 @@ def add_world_arg(p: argparse.ArgumentParser) -> None:
         "--world",
         default=None,
         help="world profile name (e.g. koolio-real) or file laid over the configuration: "
-        "realism models and sensor noise only (default: the ideal world)",
+        "realism models and sensor noise only (default, or 'ideal': none, the ideal world)",
     )
 
 
@@ -232,7 +240,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--eval-every",
-        type=int,
+        type=int_type(1, MAX_EPISODES),
         default=None,
         metavar="N",
         help="a greedy check every N episodes (of the table's count): X.evals.csv beside "
@@ -240,14 +248,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--eval-episodes",
-        type=int,
+        type=int_type(1, MAX_EPISODES),
         default=None,
         metavar="M",
         help="greedy episodes per check (default 100; with --eval-every)",
     )
 
     p = sub.add_parser("eval", help="greedy evaluation of a Q-table")
-    add_env_args(p)
+    add_env_args(p, every_goal=True)
     p.add_argument(
         "--qtable",
         default=None,
@@ -264,7 +272,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
     p.add_argument(
         "--epsilon",
-        type=float,
+        type=float_type(0.0, 1.0),
         default=None,
         metavar="E",
         help="act epsilon-greedily with E in [0, 1], as the robot does (default 0: greedy)",
@@ -299,18 +307,20 @@ EXTRA_COMMANDS: dict[str, str] = {
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``koolio-pm``: the command's exit status (0 done, 2 bad input: one line said, 130
-    interrupted). Run as a process (``argv`` None), Ctrl-C raises once and is ignored
+    interrupted by Ctrl-C, 143 stopped by SIGTERM: 128 + the signal, as a shell says).
+    Run as a process (``argv`` None), Ctrl-C raises once and is ignored
     from then on (:func:`~koolio_pymunk.store.interrupts.raise_once`): a second Ctrl-C
     while the first is handled never ends in a traceback or cuts a save short."""
     from ..store import interrupts
 
     if argv is None:
         interrupts.command_line()
+    interrupts.forget_signal()
     try:
         code = _main(argv)
     except KeyboardInterrupt:  # wherever it lands: parsing, imports, a command, a handler
         print("koolio-pm: interrupted", file=sys.stderr)
-        code = 130
+        code = interrupts.exit_status()
     if argv is None:  # the status is chosen: a Ctrl-C while Python shuts down changes nothing
         interrupts.ignore_from_now()
     return code
@@ -456,7 +466,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         f"{count(result.table.meta.get('episodes', 0), 'episode')}, {len(result.table)} states"
     )
     say(f"score the greedy policy (no exploration): {eval_command(args)}")
-    return 130 if result.interrupted else 0
+    return exit_status() if result.interrupted else 0
 
 
 def count(n: int, word: str) -> str:
@@ -565,8 +575,6 @@ def _eval_every_args(args: argparse.Namespace) -> dict[str, int]:
         if args.eval_episodes is not None:
             raise KoolioError("--eval-episodes: only with --eval-every N")
         return {}
-    if args.eval_every < 1:
-        raise KoolioError(f"--eval-every: must be >= 1, got {args.eval_every}")
     if args.robots > 1:
         raise KoolioError(
             "--eval-every: not with --robots N (the many-robot loop has no point between "
@@ -574,8 +582,6 @@ def _eval_every_args(args: argparse.Namespace) -> dict[str, int]:
         )
     if args.eval_episodes is None:
         args.eval_episodes = DEFAULT_EVAL_EPISODES
-    if args.eval_episodes < 1:
-        raise KoolioError(f"--eval-episodes: must be >= 1, got {args.eval_episodes}")
     return {"eval_every": args.eval_every, "eval_episodes": args.eval_episodes}
 
 
@@ -634,8 +640,6 @@ def cmd_eval(args: argparse.Namespace) -> int:
 
     _positive(args.episodes, "--episodes")
     eps = args.epsilon
-    if eps is not None and not 0.0 <= eps <= 1.0:
-        raise KoolioError(f"--epsilon: must be in [0, 1], got {eps}")
     goal_all = args.goal == "all"
     if goal_all:
         args.goal = None
@@ -668,8 +672,9 @@ def cmd_eval(args: argparse.Namespace) -> int:
         f"  scored in {where}: {count(args.episodes, 'episode')} per goal, seed {args.seed}, "
         f"epsilon {epsilon:g}, no learning"
     )
+    rate = "greedy goal rate" if not epsilon else "goal rate"
     print(
-        f"  {'goal':>6} {'greedy goal rate':>16} {'end of world':>13} {'wrong door':>11} "
+        f"  {'goal':>6} {rate:>16} {'end of world':>13} {'wrong door':>11} "
         f"{'step cap':>9} {'mean steps':>11} {'mean bumps':>11} {'mean return':>12}"
     )
     for r in results:
@@ -748,10 +753,10 @@ def _trained_for(table, env, policy: bool = False) -> str:
     return f"trained in {other} {name} for {goal}, in {world}"
 
 
-def warn_table(table, source: str, env, policy: bool = False) -> None:
-    """Warnings before scoring a table: it holds no episodes, or it was trained in another
-    world than the one it is scored in (a transfer: its figure is not its training's;
-    unknown for a ``policy`` file)."""
+def warn_table(table, source: str, env, policy: bool = False, verb: str = "scored") -> None:
+    """Warnings before scoring (``verb``: or watching) a table: it holds no episodes, or
+    it was trained in another world than the one it is scored in (a transfer: its figure
+    is not its training's; unknown for a ``policy`` file)."""
     from ..learning.qtable import describe_world
     from ..learning.training import world_label
 
@@ -765,7 +770,7 @@ def warn_table(table, source: str, env, policy: bool = False) -> None:
     if not policy and table.meta.get("world", "ideal") != world:
         here = {} if world == "ideal" else {"world": world}
         print(
-            f"warning: {source}: trained in {describe_world(table.meta)}, scored here in "
+            f"warning: {source}: trained in {describe_world(table.meta)}, {verb} here in "
             f"{describe_world(here)}",
             file=sys.stderr,
         )

@@ -91,7 +91,7 @@ from pathlib import Path
 from typing import Any
 
 from ..store.errors import ConfigError, KoolioError, located, shown
-from ..store.interrupts import terminate_as_interrupt
+from ..store.interrupts import exit_status, terminate_as_interrupt
 
 SPEC_KEYS = (
     "name",
@@ -186,6 +186,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     spec = load_spec(args.spec)
     if args.world is not None:
+        from ..store.config import apply_world, load_config
+
+        apply_world(load_config(), args.world)  # a bad name or file: one line naming --world
         spec.world = args.world
     out = Path(args.out) if args.out else Path("sweeps") / spec.name
     if args.workers is not None and args.workers < 1:
@@ -203,7 +206,7 @@ def run(args: argparse.Namespace) -> int:
     print_summary(outcome.rows, tasks)
     if outcome.interrupted:
         print("interrupted: finished runs are saved; run the same command to resume")
-        return 130
+        return exit_status()  # 130 after Ctrl-C, 143 after SIGTERM
     return 1 if outcome.failed else 0
 
 

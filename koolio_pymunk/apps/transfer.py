@@ -69,7 +69,7 @@ from .. import robot_runtime as rt
 from ..learning.episodes import EVAL_STREAM, ROBOT_STREAM, Episodes
 from ..learning.qtable import QTable, QTableStore, check_compatible, sensor_signature
 from ..learning.training import evaluate, train
-from ..store.config import Config
+from ..store.config import Config, apply_world
 from ..store.errors import KoolioError, QTableError
 from ..store.files import atomic_write, atomic_write_text
 from ..task.env import WRONG_DOOR, KoolioEnv
@@ -141,12 +141,11 @@ class TransferConfig:
         for ok, flag, problem in checks:
             if not ok:
                 raise KoolioError(f"{flag}: {problem}")
-        for value, flag, lo, hi in (
-            (self.robot_alpha, "--robot-alpha", 0.0, 1.0),
-            (self.robot_epsilon, "--robot-epsilon", 0.0, 1.0),
-        ):
-            if value is not None and not lo <= value <= hi:
-                raise KoolioError(f"{flag}: must be in [{lo:g}, {hi:g}], got {value:g}")
+        alpha, epsilon = self.robot_alpha, self.robot_epsilon
+        if alpha is not None and not 0.0 < alpha <= 1.0:  # learner.alpha's range
+            raise KoolioError(f"--robot-alpha: must be in (0, 1], got {alpha:g}")
+        if epsilon is not None and not 0.0 <= epsilon <= 1.0:
+            raise KoolioError(f"--robot-epsilon: must be in [0, 1], got {epsilon:g}")
         if self.goal == "random":
             raise KoolioError("--goal: random: the experiment delivers to one door (name it)")
 
@@ -512,8 +511,9 @@ def preflight(cfg: TransferConfig, out: Path) -> None:
     load (their layout and sensors), the output folder."""
     cfg.validate()
     env = make_env(cfg, None)
-    make_env(cfg, cfg.world)
-    make_env(cfg, cfg.dr_world)
+    for world, flag in ((cfg.world, "--world"), (cfg.dr_world, "--dr-world")):
+        apply_world(env.config, world, flag)  # a bad name or file: one line naming its flag
+        make_env(cfg, world)
     for seed in cfg.seeds:
         for source in SOURCES:
             given = cfg.table_file(source, seed)
@@ -760,9 +760,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--robot-alpha",
-        type=probability,
+        type=float_type(0.0, 1.0, low_open=True),
         default=None,
-        help="the runtime's alpha, [0, 1] (default: config's)",
+        help="the runtime's alpha, (0, 1] (default: config's)",
     )
     p.add_argument(
         "--robot-epsilon",

@@ -123,7 +123,9 @@ def evaluate(
 
     ``goal`` scores that goal of the arena (it stays ``env``'s active goal afterwards, as
     ``reset``'s option does; ``ValueError`` for a name the arena lacks, ``random``
-    included: score each goal in turn instead); None scores ``env``'s active goal.
+    included: score each goal in turn instead); None scores ``env``'s active goal, or, in
+    an env made with ``goal="random"``, a door drawn per episode (the result's ``goal`` is
+    then ``random``).
     ``epsilon`` 0 is the greedy policy; above 0 a uniform random action is taken with that
     probability, drawn from each episode's seeded generator. ``stop`` is asked before each
     episode; a true answer raises :class:`EvaluationStopped`.
@@ -155,7 +157,7 @@ def evaluate(
         mean_steps=float(np.mean(steps)) if steps else 0.0,
         mean_bumps=float(np.mean(bumps)) if bumps else 0.0,
         mean_reward=float(np.mean(rewards)) if rewards else 0.0,
-        goal=env.goal_name,
+        goal="random" if env.random_goal and not goal else env.goal_name,
     )
 
 

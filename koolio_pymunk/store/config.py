@@ -367,8 +367,10 @@ def world_names() -> tuple[str, ...]:
 
 
 def config_path(name: str | Path, flag: str = "--config") -> Path:
-    """The file of a profile name, or ``name`` itself when it looks like a path; a name
-    that is neither is one line naming ``flag`` and the profiles it takes.
+    """The file of a profile name, or ``name`` itself when it looks like a path (ends in
+    ``.yaml`` or ``.yml``, has a ``/``, or names no profile and an existing file); a name
+    that is none of these is one line naming ``flag`` and the profiles it takes. A
+    shipped profile's name wins over a file of the working folder of the same name.
 
     >>> config_path("paper").name, str(config_path("my.yaml"))
     ('paper.yaml', 'my.yaml')
@@ -380,15 +382,18 @@ def config_path(name: str | Path, flag: str = "--config") -> Path:
     if isinstance(name, Path) or text.lower().endswith((".yaml", ".yml")) or "/" in text:
         return Path(name)
     candidate = PROFILE_DIR / f"{text}.yaml"
-    world = flag == "--world"
+    world = flag.endswith("world")  # --world, --dr-world
     names = world_names() if world else profile_names()
     if candidate.is_file() and text in names:
         return candidate
     if candidate.is_file():  # a configuration profile given as a world
         raise ConfigError(
-            f"--world: {text}: a configuration profile, not a world: give it as --config "
+            f"{flag}: {text}: a configuration profile, not a world: give it as --config "
             f"{text} (worlds: {', '.join(names)})"
         )
+    if Path(text).is_file():  # a file of the working folder named without .yaml
+        return Path(text)
+    names = ["ideal", *names] if world else names
     close = difflib.get_close_matches(text, names, n=1)
     hint = f" (did you mean '{close[0]}'?)" if close else ""
     what, listed = ("world profile", "worlds") if world else ("profile", "profiles")
@@ -429,13 +434,20 @@ def load_config(
     return apply_world(cfg, world) if world is not None else cfg
 
 
-def apply_world(cfg: Config, world: str | Path) -> Config:
-    """A copy of ``cfg`` with the world file or profile ``world`` laid over it.
+def apply_world(cfg: Config, world: str | Path, flag: str = "--world") -> Config:
+    """A copy of ``cfg`` with the world file or profile ``world`` laid over it (``flag``
+    names where it was given, in errors).
 
     Only :data:`WORLD_SECTIONS` may appear in a world; anything else is refused, since it
     would change the robot (its sensors' layout, its learner or rewards), not its world.
+    ``ideal`` lays nothing over it (the same as no ``--world``).
+
+    >>> apply_world(load_config(), "ideal") == load_config()
+    True
     """
-    data, source = read_config_file(world, "--world")
+    if str(world) == "ideal":
+        return copy.deepcopy(cfg)
+    data, source = read_config_file(world, flag)
     if not isinstance(data, dict):
         raise ConfigError(located(source, "(top level)", "must be a mapping"))
     allowed = ", ".join(
@@ -471,6 +483,10 @@ def _outside_world(key: str, value: Any) -> str | None:
 # --- merging ------------------------------------------------------------------------
 
 
+#: Keys people write for a setting named otherwise here: the did-you-mean of an unknown key.
+KEY_SYNONYMS = {"lambda": "trace_decay", "lamda": "trace_decay", "lam": "trace_decay"}
+
+
 def _merge(obj: Any, data: Any, source: str, path: str) -> Any:
     if not isinstance(data, dict):
         raise ConfigError(located(source, path or "(top level)", "must be a mapping"))
@@ -480,7 +496,8 @@ def _merge(obj: Any, data: Any, source: str, path: str) -> Any:
     for key, value in data.items():
         item = f"{path}.{key}" if path else str(key)
         if key not in names:
-            close = difflib.get_close_matches(str(key), names, n=1)
+            close = [KEY_SYNONYMS[key]] if KEY_SYNONYMS.get(key) in names else []
+            close = close or difflib.get_close_matches(str(key), names, n=1)
             hint = f" (did you mean '{close[0]}'?)" if close else f" (valid: {', '.join(names)})"
             raise ConfigError(located(source, item, "unknown key" + hint))
         current = getattr(obj, key)
@@ -657,12 +674,11 @@ def _validate(cfg: Config, src: str) -> None:
         cfg.episode.clockless_loop_count >= 1, src, "episode.clockless_loop_count", "must be >= 1"
     )
     le = cfg.learner
-    _check(0 < le.alpha <= 1, src, "learner.alpha", "must be in (0, 1]")
-    _check(0 <= le.gamma <= 1, src, "learner.gamma", "must be in [0, 1]")
+    _check(0 < le.alpha <= 1, src, "learner.alpha", f"must be in (0, 1], got {le.alpha:g}")
+    _check(0 <= le.gamma <= 1, src, "learner.gamma", f"must be in [0, 1], got {le.gamma:g}")
     for name in ("start", "end"):
-        _check(
-            0 <= getattr(le.epsilon, name) <= 1, src, f"learner.epsilon.{name}", "must be in [0, 1]"
-        )
+        value = getattr(le.epsilon, name)
+        _check(0 <= value <= 1, src, f"learner.epsilon.{name}", f"must be in [0, 1], got {value:g}")
     _check(le.epsilon.decay_episodes >= 0, src, "learner.epsilon.decay_episodes", "must be >= 0")
     _check(
         le.algorithm in ALGORITHMS,
@@ -670,7 +686,12 @@ def _validate(cfg: Config, src: str) -> None:
         "learner.algorithm",
         f"unknown algorithm {le.algorithm!r} (valid: {', '.join(ALGORITHMS)})",
     )
-    _check(0 <= le.trace_decay <= 1, src, "learner.trace_decay", "must be in [0, 1] (lambda)")
+    _check(
+        0 <= le.trace_decay <= 1,
+        src,
+        "learner.trace_decay",
+        f"must be in [0, 1] (lambda), got {le.trace_decay:g}",
+    )
     _check(
         MIN_TRACE_CUTOFF <= le.trace_cutoff < 1,
         src,
@@ -682,6 +703,14 @@ def _validate(cfg: Config, src: str) -> None:
     _check(forget >= 0, src, "sensors.memory.forget_after", "must be >= 0 (0: never)")
     validate_realism(cfg.realism, src)
     _check_limits(cfg, src)
+    me = cfg.sensors.memory
+    _check(
+        forget == 0 or me.goal_camera or me.eow_camera or me.goal_bearing,
+        src,
+        "sensors.memory.forget_after",
+        f"{forget} forgets nothing: no sighting is in the state (turn on goal_camera, "
+        "eow_camera or goal_bearing, or leave it 0)",
+    )
     _check_lists(cfg, src)
     _check_keyword_bits(cfg, src)
 

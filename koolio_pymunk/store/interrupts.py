@@ -28,6 +28,29 @@ from typing import Any
 
 #: Seconds a pending Ctrl-C may wait for the loop before a second one interrupts at once.
 GRACE_SECONDS = 2.0
+#: The signal of the last interrupt taken (:func:`exit_status`).
+_taken = signal.SIGINT
+
+
+def exit_status() -> int:
+    """A stopped command's exit status, as a shell reports a process ended by the
+    signal: 128 + the signal of the interrupt taken, 130 for Ctrl-C (SIGINT), 143 for
+    SIGTERM.
+
+    >>> exit_status() in (130, 143)
+    True
+    """
+    return 128 + int(_taken)
+
+
+def forget_signal() -> None:
+    """No interrupt taken yet (a command starting: :func:`exit_status` says 130)."""
+    _note(signal.SIGINT)
+
+
+def _note(signum: int) -> None:
+    global _taken
+    _taken = signal.Signals(signum)
 
 
 def raise_once(signum: int, frame: Any) -> None:
@@ -35,6 +58,7 @@ def raise_once(signum: int, frame: Any) -> None:
     Ctrl-C raises ``KeyboardInterrupt``; from then on Ctrl-C is ignored, since that one
     is being handled (the files put in step, one line said, exit status 130)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _note(signum)
     raise KeyboardInterrupt
 
 
@@ -63,6 +87,7 @@ def terminate_as_interrupt() -> Iterator[None]:
 
 def _terminate(signum: int, frame: Any) -> None:
     signal.signal(signal.SIGTERM, signal.SIG_IGN)  # one stop at a time, as raise_once
+    _note(signum)
     raise KeyboardInterrupt
 
 
@@ -115,6 +140,7 @@ class SafeInterrupt:
         # returns, and must then find the first one pending since now, not since long ago
         self._since = time.monotonic()
         self.signal = signal.Signals(signum)
+        _note(signum)
         self.pending = True
 
     def check(self) -> None:

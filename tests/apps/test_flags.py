@@ -42,7 +42,11 @@ CASES = [
     (["transfer", "--eval-episodes", "0"], "--eval-episodes: must be in 1.."),
     (["transfer", "--eval-every", "0"], "--eval-every: must be in 1.."),
     (["transfer", "--target", "nan"], "--target: must be in [0, 1], got nan"),
-    (["transfer", "--robot-alpha", "inf"], "--robot-alpha: must be in [0, 1], got inf"),
+    (["transfer", "--robot-alpha", "inf"], "--robot-alpha: must be in (0, 1], got inf"),
+    (["transfer", "--robot-alpha", "0"], "--robot-alpha: must be in (0, 1], got 0"),
+    (["train", "--eval-every", BIG], "--eval-every: must be in 1.."),
+    (["train", "--eval-every", "2", "--eval-episodes", "0"], "--eval-episodes: must be in 1.."),
+    (["eval", "--epsilon", "1.5"], "--epsilon: must be in [0, 1], got 1.5"),
     (["transfer", "--robot-epsilon", "1.5"], "--robot-epsilon: must be in [0, 1]"),
 ]
 

@@ -341,6 +341,7 @@ def test_the_compiled_episode_counts_for_train_only(monkeypatch) -> None:
         (["train", "--episode", "0"], ["unrecognized arguments: --episode 0",
                                        "did you mean --episodes?"]),
         (["eval", "--qtabel=x.qtable"], ["did you mean --qtable?"]),
+        (["train", "--epi", "8"], ["did you mean --episodes?"]),  # cut short: the one it starts
         (["view", "--screnshot", "a.png"], ["did you mean --screenshot?"]),
         (["trian"], ["invalid choice: 'trian'", "did you mean 'train'?"]),
     ],
@@ -419,3 +420,67 @@ def _readme_commands() -> list[list[str]]:
     from tests.test_docs import documented_commands
 
     return documented_commands("README.md")
+
+
+# -- 7. the second audit ---------------------------------------------------------------------
+def test_world_ideal_is_the_default_world(here, capsys) -> None:
+    """``--world ideal`` names the default (nothing laid over): the same table, bit for
+    bit, and it is listed among the worlds of a bad name's error."""
+    assert run(capsys, "train", *ROOM, "--episodes", "2", "--qtable", "a.qtable")[0] == 0
+    argv = ["train", *ROOM, "--episodes", "2", "--qtable", "b.qtable", "--world", "ideal"]
+    assert run(capsys, *argv)[0] == 0
+    assert (here / "a.qtable").read_bytes() == (here / "b.qtable").read_bytes()
+    code, out, err = run(capsys, "eval", *ROOM, "--qtable", "a.qtable", "--episodes", "1",
+                         "--world", "ideal")  # fmt: skip
+    assert code == 0 and "the ideal world" in out and "warning" not in err
+    expect_error(capsys, here, ["eval", "--world", "ideel"], "did you mean 'ideal'?",
+                 "(worlds: ideal, koolio-real")  # fmt: skip
+
+
+def test_a_configuration_file_without_yaml_suffix_is_read(here, capsys) -> None:
+    (here / "tiny").write_text("episode: {max_steps: 30}\n")
+    argv = ["train", "--arena", "room", "--config", "tiny", "--episodes", "1", "--qtable"]
+    argv += ["t.qtable"]
+    assert run(capsys, *argv)[0] == 0
+    assert (
+        run(
+            capsys,
+            "eval",
+            "--arena",
+            "room",
+            "--config",
+            "tiny.yaml",
+            "--qtable",
+            "t.qtable",
+            "--episodes",
+            "1",
+        )[0]
+        == 0
+    )  # fmt: skip  (the same configuration)
+
+
+def test_eval_of_random_goals_is_labelled_random(here, capsys) -> None:
+    assert run(capsys, "train", *ROOM, "--episodes", "2", "--qtable", "t.qtable")[0] == 0
+    argv = ["eval", *ROOM, "--qtable", "t.qtable", "--episodes", "3", "--goal", "random"]
+    code, out, _ = run(capsys, *argv)
+    rows = [ln.split() for ln in out.splitlines() if ln.strip().endswith(tuple("0123456789"))]
+    assert code == 0 and rows and rows[-1][0] == "random", out
+    code, out, _ = run(capsys, *argv, "--json")
+    assert code == 0 and '"goal": "random"' in out
+    code, out, _ = run(capsys, *argv, "--epsilon", "0.5")
+    assert code == 0 and "greedy goal rate" not in out and "goal rate" in out
+
+
+def test_view_says_when_it_watches_a_table_of_another_world(here, capsys) -> None:
+    assert run(capsys, "train", *ROOM, "--episodes", "2", "--qtable", "t.qtable")[0] == 0
+    argv = ["view", *ROOM, "--greedy", "--qtable", "t.qtable", "--steps", "2"]
+    code, _, err = run(capsys, *argv, "--world", "koolio-real")
+    assert code == 0
+    assert "warning: t.qtable: trained in the ideal world, watched here in world koolio-real" in err
+    assert "warning" not in run(capsys, *argv)[2]
+
+
+def test_sweep_names_its_world_flag(here, capsys) -> None:
+    (here / "s.yaml").write_text("name: s\nepisodes: 2\nseeds: [0]\n")
+    expect_error(capsys, here, ["sweep", "s.yaml", "--world", "nope", "--dry-run"],
+                 "koolio-pm: error: --world: nope: no such world profile")  # fmt: skip

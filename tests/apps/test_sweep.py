@@ -296,7 +296,7 @@ base: {episode: {max_steps: 200}, learner: {algorithm: dyna}}
 @pytest.mark.parametrize("sig", ["SIGTERM", "SIGKILL"])
 def test_a_stopped_sweep_ends_without_tracebacks(tmp_path, sig):
     """SIGTERM stops a sweep as Ctrl-C does (finished runs kept, workers stopped, exit
-    130, one line); after a SIGKILL of the sweep its workers end quietly (nobody to
+    143 = 128 + SIGTERM, one line); after a SIGKILL of the sweep its workers end quietly (nobody to
     tell), without a traceback."""
     import signal
     import subprocess
@@ -316,7 +316,7 @@ def test_a_stopped_sweep_ends_without_tracebacks(tmp_path, sig):
     proc.send_signal(getattr(signal, sig))
     stdout, err = proc.communicate(timeout=120)
     if sig == "SIGTERM":
-        assert proc.returncode == 130, err
+        assert proc.returncode == 143, err
         assert "interrupted: finished runs are saved" in stdout + err
     else:  # the workers, orphaned, finish their run and find the pipe closed
         deadline = time.monotonic() + 120

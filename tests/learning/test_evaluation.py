@@ -345,8 +345,9 @@ def test_a_best_table_of_another_layout_is_refused(tmp_path) -> None:
 @pytest.mark.parametrize(
     ("flags", "message"),
     [
-        (["--eval-every", "0"], "--eval-every: must be >= 1, got 0"),
-        (["--eval-every", "2", "--eval-episodes", "0"], "--eval-episodes: must be >= 1"),
+        (["--eval-every", "0"], "--eval-every: must be in 1..1,000,000,000, got 0"),
+        (["--eval-every", "9" * 23], "--eval-every: must be in 1..1,000,000,000, got 9"),
+        (["--eval-every", "2", "--eval-episodes", "0"], "--eval-episodes: must be in 1..1,"),
         (["--eval-episodes", "5"], "--eval-episodes: only with --eval-every N"),
         (["--eval-every", "2", "--robots", "2"], "--eval-every: not with --robots N"),
     ],

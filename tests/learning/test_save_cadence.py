@@ -101,14 +101,15 @@ def test_a_sigkill_between_saves_resumes_exactly(tmp_path) -> None:
 
 def test_sigterm_saves_and_stops_like_ctrl_c(tmp_path) -> None:
     """SIGTERM (a scheduler's stop) with a long cadence: the unfinished episode folded in,
-    the table saved, the row logged ``interrupted``, exit 130, table and log in step."""
+    the table saved, the row logged ``interrupted``, exit 143 (128 + SIGTERM), table and
+    log in step."""
     (tmp_path / "c.yaml").write_text(PYTHON_LOOP)
     argv = _argv(tmp_path, "t", "--save-every", "1000")
     proc = subprocess.Popen([sys.executable, "-m", "koolio_pymunk", *argv], stderr=subprocess.PIPE)
     _wait_for_rows(tmp_path / "t.csv", 5, proc)
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=120)
-    assert proc.returncode == 130, err
+    assert proc.returncode == 143, err
     rows = (tmp_path / "t.csv").read_text().splitlines()[1:]
     table = load_qtable(tmp_path / "t.qtable")
     assert rows[-1].split(",")[4] == "interrupted"

@@ -135,6 +135,8 @@ def test_memoryless_signature_is_unchanged() -> None:
         ("{forget_after: 10001}", "sensors.memory.forget_after: must be <= 10,000"),
         ('{goal_camera: "yes"}', "sensors.memory.goal_camera: expected true or false"),
         ("{last_seen: true}", "sensors.memory.last_seen"),
+        ("{forget_after: 5}", "sensors.memory.forget_after: 5 forgets nothing"),
+        ("{previous_action: true, forget_after: 5}", "forget_after: 5 forgets nothing"),
     ],
 )
 def test_bad_memory_options_are_one_line(tmp_path, capsys, memory, message) -> None:

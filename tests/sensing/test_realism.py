@@ -508,7 +508,7 @@ def test_unknown_world_profile_is_one_line_exit_2(capsys) -> None:
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [
         "koolio-pm: error: --world: koolio-rael: no such world profile (did you mean "
-        "'koolio-real'?) (worlds: koolio-real, koolio-real-dr; a file name ends in .yaml)"
+        "'koolio-real'?) (worlds: ideal, koolio-real, koolio-real-dr; a file name ends in .yaml)"
     ]
     with pytest.raises(ConfigError):
         load_config(world="koolio-rael")

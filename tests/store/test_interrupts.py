@@ -103,7 +103,8 @@ def _in_step(folder: Path) -> None:
 def _stopped_run(folder: Path, command: str, signals, extra=(), **popen) -> str:
     """Run ``koolio-pm command`` in ``folder`` until its log has a few rows, send
     ``signals`` (``(signal, seconds to wait before it)``, ...), and return its stderr once
-    it has ended (exit status 130, at most one line, the table and the log in step)."""
+    it has ended (exit status 128 + the first signal: 130 for SIGINT, 143 for SIGTERM; at
+    most one line, the table and the log in step)."""
     (folder / "tiny.yaml").write_text("episode: {max_steps: 60}\n")
     argv = [sys.executable, "-m", "koolio_pymunk", command, "--arena", "room"]
     argv += ["--config", "tiny.yaml", "--qtable", "q.qtable", "--log", "q.csv"]
@@ -126,7 +127,7 @@ def _stopped_run(folder: Path, command: str, signals, extra=(), **popen) -> str:
     finally:
         if p.poll() is None:
             p.kill()
-    assert p.returncode == 130, err
+    assert p.returncode == 128 + int(signals[0][0]), err
     assert "Traceback" not in err and len(err.strip().splitlines()) <= 1, err
     _in_step(folder)
     return err

@@ -233,7 +233,7 @@ def run(args: argparse.Namespace) -> int:
     from ...learning.training import RunFiles
     from ...store.interrupts import deferred
     from ...task.env import KoolioEnv
-    from ..cli import announce_compile
+    from ..cli import announce_compile, warn_table
     from .session import Session, watched_table
 
     if _headless():
@@ -248,7 +248,9 @@ def run(args: argparse.Namespace) -> int:
     existed = store.exists()
     greedy = args.greedy or (existed and not args.learn)
     if greedy:  # what can be refused is refused before anything is compiled or written
-        watched_table(env, args.qtable, warn=False)
+        # and, as eval, a table of no episodes or of another world is said so
+        table = watched_table(env, args.qtable, warn=False)
+        warn_table(table, args.qtable, env, verb="watched")
     else:
         RunFiles.check(env, store, args.log)
     announce_compile(env)
