@@ -222,8 +222,8 @@ def test_non_table_files_are_refused(tmp_path, capsys):
 
 
 def test_out_replaces_only_a_file_of_its_kind(trained, tmp_path, capsys):
-    """``--out`` replaces an earlier export (policy or table), never another file, and
-    never one a running command holds (a training run's log: newcomer audit)."""
+    """``--out`` replaces an earlier policy file, never another file, and never one a
+    running command holds (a training run's log: newcomer audit)."""
     _, _, path = trained
     work = tmp_path / "w"
     work.mkdir()
@@ -236,11 +236,47 @@ def test_out_replaces_only_a_file_of_its_kind(trained, tmp_path, capsys):
     export = ["export", "--qtable", str(path), "--out"]
     expect_error(capsys, work, [*export, str(log)], "run.csv: --out: exists and is not a")
     expect_error(capsys, work, [*export, str(notes)], "notes.json: --out: exists and is not a")
-    expect_error(capsys, work, [*export, str(table_like)], "other.qtable: --out: exists and")
-    pol, back = work / "p.json", work / "b.qtable"
-    for _ in range(2):  # an earlier export of each kind is replaced
+    expect_error(capsys, work, [*export, str(table_like)], "other.qtable: --out: exists, and")
+    pol = work / "p.json"
+    for _ in range(2):  # an earlier policy file is replaced
         assert cli.main([*export, str(pol)]) == 0
-        assert cli.main(["export", "--qtable", str(pol), "--out", str(back)]) == 0
     capsys.readouterr()
     with FileLock(pol, "koolio-pm train"):  # in use: refused, left as it was
         expect_error(capsys, work, [*export, str(pol)], "p.json: in use by process")
+
+
+def test_out_never_replaces_a_table(trained, tmp_path, capsys):
+    """A trained Q-table is never replaced (audit: ``--out t.qtable`` wrote another
+    table over it, exit 0, its ``.bak`` one episode behind), whatever its name; nor is a
+    table's backup taken over. A ``.qtable`` output is a new file, and a policy file is
+    still replaced by the next export."""
+    _, _, path = trained
+    work = tmp_path / "w"
+    work.mkdir()
+    other = work / "other.json"
+    assert cli.main(["export", "--qtable", str(path), "--out", str(other)]) == 0
+    mine = work / "t.qtable"
+    mine.write_bytes(path.read_bytes())
+    (work / "t.qtable.bak").write_bytes(path.read_bytes())
+    (work / "gone.qtable.bak").write_bytes(path.read_bytes())
+    (work / "raw").write_bytes(path.read_bytes())  # a table under another name
+    capsys.readouterr()
+    from_other = ["export", "--qtable", str(other), "--out"]
+    line = expect_error(capsys, work, [*from_other, str(mine)], "t.qtable: --out: exists, and")
+    assert line == (
+        f"koolio-pm: error: {mine}: --out: exists, and export writes a .qtable file only "
+        "under a new name (it never replaces a Q-table): choose another name or remove it"
+    )
+    expect_error(
+        capsys,
+        work,
+        [*from_other, str(work / "gone.qtable")],
+        f"gone.qtable: --out: a table's backup {work / 'gone.qtable.bak'} exists beside it",
+    )
+    expect_error(capsys, work, [*from_other, str(work / "raw")], "raw: --out: exists and is not")
+    expect_error(capsys, work, [*from_other, str(mine) + ".bak"], "t.qtable.bak: --out: exists")
+    new = work / "new.qtable"
+    assert cli.main([*from_other, str(new)]) == 0
+    assert new.read_bytes() == path.read_bytes()
+    expect_error(capsys, work, [*from_other, str(new)], "new.qtable: --out: exists, and")
+    assert cli.main(["export", "--qtable", str(new), "--out", str(other)]) == 0  # a policy
