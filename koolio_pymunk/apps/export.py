@@ -8,7 +8,9 @@ the keyword layout, and the sensor thresholds the robot needs to encode raw read
 keeps learning that policy on the robot and saves it back in the same format.
 
 The robot's learning settings (``learner``: alpha, gamma, epsilon, and the algorithm with
-its parameters when it is not one-step Q) come from ``--config``, like the rewards. A
+its parameters when it is not one-step Q) come from ``--config``, like the rewards: the
+configuration the table was learned with (:func:`check_configuration` refuses another
+keyword layout, sensor signature or algorithm, as ``eval`` and ``train`` do). A
 Dyna-Q model is never exported (it describes the simulated world, and the robot builds its
 own from real steps), nor read back from a policy file.
 
@@ -34,9 +36,17 @@ from pathlib import Path
 from typing import Any
 
 from .. import robot_runtime as rt
-from ..learning.algorithms import algorithm_record
-from ..learning.qtable import MAGIC, MAX_TABLE_BYTES, RECORD_KEYS, QTable, backup_path
-from ..store.config import Config, load_config
+from ..learning.algorithms import algorithm_record, check_algorithm
+from ..learning.qtable import (
+    MAGIC,
+    MAX_TABLE_BYTES,
+    RECORD_KEYS,
+    QTable,
+    backup_path,
+    check_compatible,
+    sensor_signature,
+)
+from ..store.config import Config, load_config, state_fields
 from ..store.errors import FileError, QTableError, located
 from ..store.files import atomic_write, check_path, read_bytes
 from ..store.keyword import KeywordLayout
@@ -60,8 +70,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--config",
         default=None,
-        help="YAML configuration whose learner (alpha, gamma, epsilon) and rewards go into "
-        "the policy as the robot's defaults (default: built-in defaults)",
+        help="YAML configuration or profile the table was learned with: its learner (alpha, "
+        "gamma, epsilon, algorithm) and rewards go into the policy as the robot's defaults; "
+        "a table of another keyword layout, sensors or algorithm is refused, as eval "
+        "refuses it (default: built-in defaults)",
     )
     p.add_argument(
         "--world",
@@ -91,6 +103,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"wrote {out}: {len(table)} states, {table.meta.get('episodes', 0)} episodes")
         return 0
     cfg = load_config(args.config, world=args.world)
+    check_configuration(table, cfg, args.qtable)
     doc = policy_document(table, cfg, episode=args.episode, source=args.qtable)
     if args.world is not None:
         doc["world"] = str(args.world)
@@ -104,6 +117,18 @@ def run(args: argparse.Namespace) -> int:
         f"{doc['episodes']} episodes, {out.stat().st_size:,} bytes"
     )
     return 0
+
+
+def check_configuration(table: QTable, cfg: Config, source: str) -> None:
+    """Refuse to export ``table`` with a configuration it was not learned with, as
+    ``eval`` refuses to score it (:func:`~koolio_pymunk.learning.qtable.check_compatible`:
+    its keyword layout and sensors, naming the shipped profile that made it), and as
+    ``train`` refuses to continue it with another learning algorithm: the policy's
+    learner and rewards come from the configuration, and the robot goes on learning with
+    them."""
+    layout = KeywordLayout(tuple(state_fields(cfg.sensors)))
+    check_compatible(table, layout, sensor_signature(cfg), source)
+    check_algorithm(table, cfg.learner, source, "give export the --config it was learned with")
 
 
 def check_replaceable(out: Path, kind: str) -> None:

@@ -13,14 +13,16 @@ from koolio_pymunk.apps import cli
 from koolio_pymunk.apps.export import load_any_table, policy_document, write_policy
 from koolio_pymunk.learning.qlearning import QLearner
 from koolio_pymunk.learning.qtable import (
+    QTable,
     QTableStore,
     check_compatible,
     load_qtable,
     sensor_signature,
 )
 from koolio_pymunk.learning.training import train
-from koolio_pymunk.store.config import load_config
+from koolio_pymunk.store.config import load_config, state_fields
 from koolio_pymunk.store.errors import QTableError
+from koolio_pymunk.store.keyword import KeywordLayout
 from koolio_pymunk.store.locks import FileLock
 from koolio_pymunk.task.env import KoolioEnv
 
@@ -280,3 +282,73 @@ def test_out_never_replaces_a_table(trained, tmp_path, capsys):
     assert new.read_bytes() == path.read_bytes()
     expect_error(capsys, work, [*from_other, str(new)], "new.qtable: --out: exists, and")
     assert cli.main(["export", "--qtable", str(new), "--out", str(other)]) == 0  # a policy
+
+
+def _table_file(path, cfg, algorithm=None):
+    """A small table of ``cfg``'s layout and sensors (3 states, 3 episodes) at ``path``."""
+    layout = KeywordLayout(tuple(state_fields(cfg.sensors)))
+    meta = {"sensors": sensor_signature(cfg), "episodes": 3}
+    if algorithm is not None:
+        meta["algorithm"] = algorithm
+    table = QTable(layout, meta, 0.0)
+    for i in range(3):
+        table.row(layout.state_key([i % lv for _, lv in layout.fields]))[:] = [i, -1.0, 2, 0, 1]
+    path.write_bytes(table.to_bytes())
+    return path
+
+
+def test_export_checks_the_table_against_the_configuration(tmp_path, capsys):
+    """export refuses a table its configuration did not make, in the line ``eval`` gives
+    (audit: a paper-memory-qlambda table exported without --config became a one-step Q
+    policy with the default alpha, epsilon and rewards; a 27-bit table exported with the
+    32-bit paper-memory configuration was accepted); with its own --config the policy
+    carries that configuration's learner and rewards."""
+    mem_cfg = load_config("paper-memory-qlambda")
+    qlambda = {"name": "qlambda", "trace_cutoff": 0.01, "trace_decay": 0.9}
+    mem = _table_file(tmp_path / "mem.qtable", mem_cfg, qlambda)
+    plain = _table_file(tmp_path / "plain.qtable", load_config())
+    dyna = _table_file(
+        tmp_path / "dyna.qtable", load_config(), {"name": "dyna", "planning_steps": 5}
+    )
+    out = str(tmp_path / "x.json")
+    line = expect_error(
+        capsys, tmp_path, ["export", "--qtable", str(mem), "--out", out], "mem.qtable: layout:"
+    )
+    assert line.endswith(
+        "(it was made with the shipped profile 'paper-memory-qlambda': add --config "
+        "paper-memory-qlambda)"
+    )
+    evals = ["eval", "--qtable", str(mem), "--episodes", "1"]
+    assert expect_error(capsys, tmp_path, evals) == line  # the same refusal as eval's
+    line = expect_error(
+        capsys,
+        tmp_path,
+        ["export", "--qtable", str(plain), "--config", "paper-memory", "--out", out],
+        "plain.qtable: layout: table made for 27-bit keyword",
+    )
+    assert "this run uses 32-bit keyword" in line
+    assert line.endswith("(it was made with the default configuration: leave out --config)")
+    expect_error(
+        capsys,
+        tmp_path,
+        ["export", "--qtable", str(plain), "--config", "paper", "--out", out],
+        "plain.qtable: sensors.camera_sensors_deg: table made for [0.0, 45.0, -45.0], this "
+        "run uses [0.0, 90.0, -90.0]",
+    )
+    line = expect_error(capsys, tmp_path, ["export", "--qtable", str(dyna), "--out", out])
+    assert line == (
+        f"koolio-pm: error: {dyna}: algorithm: table learned with dyna, this run uses q "
+        "(give export the --config it was learned with)"
+    )
+    argv = ["export", "--qtable", str(mem), "--config", "paper-memory-qlambda", "--out", out]
+    assert cli.main(argv) == 0
+    doc = json.loads((tmp_path / "x.json").read_text())
+    assert doc["learner"] == {
+        "alpha": 0.07,
+        "gamma": mem_cfg.learner.gamma,
+        "epsilon": 0.01,
+        "algorithm": "qlambda",
+        "trace_decay": 0.9,
+        "trace_cutoff": mem_cfg.learner.trace_cutoff,
+    }
+    assert doc["rewards"]["bump"] == -12.0 and doc["layout"]["total_bits"] == 35
