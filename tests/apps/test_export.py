@@ -6,23 +6,21 @@ import json
 
 import numpy as np
 import pytest
-from inputs import expect_error
+from inputs import expect_error, table_file
 
 from koolio_pymunk import robot_runtime as rt
 from koolio_pymunk.apps import cli
 from koolio_pymunk.apps.export import load_any_table, policy_document, write_policy
 from koolio_pymunk.learning.qlearning import QLearner
 from koolio_pymunk.learning.qtable import (
-    QTable,
     QTableStore,
     check_compatible,
     load_qtable,
     sensor_signature,
 )
 from koolio_pymunk.learning.training import train
-from koolio_pymunk.store.config import load_config, state_fields
+from koolio_pymunk.store.config import load_config
 from koolio_pymunk.store.errors import QTableError
-from koolio_pymunk.store.keyword import KeywordLayout
 from koolio_pymunk.store.locks import FileLock
 from koolio_pymunk.task.env import KoolioEnv
 
@@ -284,19 +282,6 @@ def test_out_never_replaces_a_table(trained, tmp_path, capsys):
     assert cli.main(["export", "--qtable", str(new), "--out", str(other)]) == 0  # a policy
 
 
-def _table_file(path, cfg, algorithm=None):
-    """A small table of ``cfg``'s layout and sensors (3 states, 3 episodes) at ``path``."""
-    layout = KeywordLayout(tuple(state_fields(cfg.sensors)))
-    meta = {"sensors": sensor_signature(cfg), "episodes": 3}
-    if algorithm is not None:
-        meta["algorithm"] = algorithm
-    table = QTable(layout, meta, 0.0)
-    for i in range(3):
-        table.row(layout.state_key([i % lv for _, lv in layout.fields]))[:] = [i, -1.0, 2, 0, 1]
-    path.write_bytes(table.to_bytes())
-    return path
-
-
 def test_export_checks_the_table_against_the_configuration(tmp_path, capsys):
     """export refuses a table its configuration did not make, in the line ``eval`` gives
     (audit: a paper-memory-qlambda table exported without --config became a one-step Q
@@ -305,9 +290,9 @@ def test_export_checks_the_table_against_the_configuration(tmp_path, capsys):
     carries that configuration's learner and rewards."""
     mem_cfg = load_config("paper-memory-qlambda")
     qlambda = {"name": "qlambda", "trace_cutoff": 0.01, "trace_decay": 0.9}
-    mem = _table_file(tmp_path / "mem.qtable", mem_cfg, qlambda)
-    plain = _table_file(tmp_path / "plain.qtable", load_config())
-    dyna = _table_file(
+    mem = table_file(tmp_path / "mem.qtable", mem_cfg, qlambda)
+    plain = table_file(tmp_path / "plain.qtable", load_config())
+    dyna = table_file(
         tmp_path / "dyna.qtable", load_config(), {"name": "dyna", "planning_steps": 5}
     )
     out = str(tmp_path / "x.json")
