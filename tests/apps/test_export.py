@@ -192,6 +192,14 @@ def test_init_qtable_refuses_other_sensor_layout(trained, tmp_path, capsys):
         (lambda d: d["layout"]["fields"][0].update(shift=24), "fields[0].shift: 24, expected 25"),
         (lambda d: d["encoding"]["thresholds"].update(sonar=[6, 5]), "must be increasing"),
         (lambda d: d.pop("sensors"), "sensors: missing"),
+        (lambda d: d["greedy"][0].update(action=9), "greedy[0].action: action 9 is not an action"),
+        (lambda d: d["greedy"][1].update(action=True), "greedy[1]: needs an integer state and"),
+        (lambda d: d["greedy"].pop(), "greedy: 163 items, expected 164 (one per state of"),
+        (lambda d: d["greedy"].reverse(), "greedy[0].state: "),
+        (lambda d: d["layout"].update(total_bits=99), "layout.total_bits: 99, expected 27"),
+        (lambda d: d["layout"].update(total_bits="27"), "layout.total_bits: '27', expected 27"),
+        (lambda d: d.update(n_states=d["n_states"] + 1), "n_states: 165, expected 164 (the states"),
+        (lambda d: d.update(n_states=None), "n_states: None, expected 164"),
     ],
 )
 def test_bad_policy_files_are_refused_in_one_line(trained, tmp_path, edit, message):
@@ -205,6 +213,33 @@ def test_bad_policy_files_are_refused_in_one_line(trained, tmp_path, edit, messa
     assert message in str(info.value)
     assert str(info.value).startswith(str(bad))
     assert "\n" not in str(info.value)
+
+
+def test_the_greedy_list_is_the_entries_greedy_actions(trained, tmp_path):
+    """``greedy`` is checked against the entries: an action that is in range but not the
+    state's greedy one is refused (a reader acting on ``greedy`` alone would do otherwise
+    than the robot); a file without the derived items still loads."""
+    _, table, _ = trained
+    doc = policy_document(table)
+    state, row = next((s, r) for s, r in sorted(table.rows.items()) if len(set(r)) > 1)
+    i = sorted(table.rows).index(state)
+    best = row.index(max(row))
+    other = next(a for a in range(5) if row[a] != row[best])
+    doc["greedy"][i]["action"] = other
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(doc))
+    message = (
+        f"{bad}: greedy[{i}].action: {other} is not the greedy action of state {state} "
+        f"(expected {best})"
+    )
+    with pytest.raises(QTableError) as info:
+        load_any_table(bad)
+    assert str(info.value) == message
+    for key in ("greedy", "n_states"):
+        del doc[key]
+    del doc["layout"]["total_bits"]
+    bad.write_text(json.dumps(doc))
+    assert load_any_table(bad).rows == table.rows
 
 
 def test_non_table_files_are_refused(tmp_path, capsys):
