@@ -1619,7 +1619,22 @@ line 'robot_runtime: error: <file>: <item>: <problem>' when it cannot."""
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python robot_runtime.py POLICY``: check a policy file and print a summary."""
+    """``python robot_runtime.py POLICY``: check a policy file and print a summary (exit
+    0; 2 with one line when the robot cannot run it). A reader that leaves early
+    (``| head -2``) ends it quietly, with 0, as ``koolio-pm``."""
+    try:
+        code = _check_command(argv)
+        sys.stdout.flush()  # here, not at exit: a closed pipe is seen inside the try
+    except BrokenPipeError:
+        # Python's documented recipe: stdout pointed at devnull, so the exit flush is quiet
+        with contextlib.suppress(OSError, ValueError):
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
+    return code
+
+
+def _check_command(argv: Sequence[str] | None) -> int:
+    """:func:`main`'s work: the arguments, the check and the summary."""
     args = list(sys.argv[1:] if argv is None else argv)
     if args in (["-h"], ["--help"]):
         print(_USAGE)
