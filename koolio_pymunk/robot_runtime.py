@@ -789,8 +789,14 @@ def validate_document(doc: Any, source: str = "<policy>") -> None:
       far (simulation + robot); ``n_states``: number of visited states.
     * ``entries``: ``[{"keyword": K, "q": Q}, ...]``, ascending keywords, every action of
       every visited state, every Q (and ``q_init``) within +-:data:`MAX_Q`; ``greedy``:
-      ``[{"state": S, "action": A}, ...]`` with ``S = K >> action_bits`` (derived data:
-      rebuilt on every save).
+      ``[{"state": S, "action": A}, ...]`` with ``S = K >> action_bits``, one per visited
+      state, ascending, ``A`` the action of highest Q (the lowest index among equal
+      values).
+
+    ``n_states``, ``greedy`` and ``layout.total_bits`` (and each field's ``bits`` and
+    ``shift``, ``layout.action_bits``) are derived data, rebuilt on every save; each may
+    be left out, and one given must be what ``entries`` and ``layout.fields`` make it (a
+    reader may act on it alone).
     """
     if not isinstance(doc, dict):
         raise _err(source, "", "not a policy file (not a JSON object)")
@@ -974,12 +980,10 @@ def _check_layout(lay: Any, source: str) -> None:
         for key, want in (("bits", expect.bits[i]), ("shift", expect.shifts[i])):
             if key in f and f[key] != want:
                 raise _err(source, f"layout.fields[{i}].{key}", f"{_show(f[key])}, expected {want}")
-    if "action_bits" in lay and lay["action_bits"] != expect.action_bits:
-        raise _err(
-            source,
-            "layout.action_bits",
-            f"{_show(lay['action_bits'])}, expected {expect.action_bits}",
-        )
+    for key in ("action_bits", "total_bits"):
+        want = getattr(expect, key)
+        if key in lay and (not _is_int(lay[key]) or lay[key] != want):
+            raise _err(source, f"layout.{key}", f"{_show(lay[key])}, expected {want}")
 
 
 def _check_encoding(doc: dict[str, Any], source: str) -> None:
@@ -1090,8 +1094,43 @@ def _check_entries(doc: dict[str, Any], source: str) -> None:
         if kw in seen:
             raise _err(source, item, f"keyword {kw} repeated")
         seen.add(kw)
-    if not isinstance(doc.get("greedy", []), list):
+    rows: dict[int, list[float]] = {}
+    for e in entries:
+        kw = e["keyword"]
+        row = rows.setdefault(kw >> layout.action_bits, [doc["q_init"]] * layout.n_actions)
+        row[kw & amask] = e["q"]
+    if "n_states" in doc and (not _is_int(doc["n_states"]) or doc["n_states"] != len(rows)):
+        problem = f"{_show(doc['n_states'])}, expected {len(rows)} (the states of entries)"
+        raise _err(source, "n_states", problem)
+    if "greedy" in doc:
+        _check_greedy(doc["greedy"], rows, layout, source)
+
+
+def _check_greedy(greedy: Any, rows: dict[int, list[float]], layout: Layout, source: str) -> None:
+    """``greedy``, derived data: one ``{"state", "action"}`` per visited state, ascending,
+    each the action of highest Q (the lowest index among equal values), as
+    :func:`rows_json` writes it. A reader in another language may act on it alone."""
+    if not isinstance(greedy, list):
         raise _err(source, "greedy", "must be a list")
+    states = sorted(rows)
+    if len(greedy) != len(states):
+        problem = f"{len(greedy)} items, expected {len(states)} (one per state of entries)"
+        raise _err(source, "greedy", problem)
+    for i, (g, state) in enumerate(zip(greedy, states)):
+        item = f"greedy[{i}]"
+        if not isinstance(g, dict) or not _is_int(g.get("state")) or not _is_int(g.get("action")):
+            raise _err(source, item, "needs an integer state and an integer action")
+        problem = action_problem(g["action"], layout)
+        if problem is not None:
+            raise _err(source, f"{item}.action", problem)
+        if g["state"] != state:
+            problem = f"{_show(g['state'])}, expected {state} (the states of entries, ascending)"
+            raise _err(source, f"{item}.state", problem)
+        row = rows[state]
+        best = row.index(max(row))
+        if g["action"] != best:
+            problem = f"{g['action']} is not the greedy action of state {state} (expected {best})"
+            raise _err(source, f"{item}.action", problem)
 
 
 def _is_int(v: Any) -> bool:
@@ -1580,7 +1619,22 @@ line 'robot_runtime: error: <file>: <item>: <problem>' when it cannot."""
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python robot_runtime.py POLICY``: check a policy file and print a summary."""
+    """``python robot_runtime.py POLICY``: check a policy file and print a summary (exit
+    0; 2 with one line when the robot cannot run it). A reader that leaves early
+    (``| head -2``) ends it quietly, with 0, as ``koolio-pm``."""
+    try:
+        code = _check_command(argv)
+        sys.stdout.flush()  # here, not at exit: a closed pipe is seen inside the try
+    except BrokenPipeError:
+        # Python's documented recipe: stdout pointed at devnull, so the exit flush is quiet
+        with contextlib.suppress(OSError, ValueError):
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
+    return code
+
+
+def _check_command(argv: Sequence[str] | None) -> int:
+    """:func:`main`'s work: the arguments, the check and the summary."""
     args = list(sys.argv[1:] if argv is None else argv)
     if args in (["-h"], ["--help"]):
         print(_USAGE)

@@ -73,6 +73,21 @@ def small_table() -> QTable:
     return table
 
 
+def table_file(path: Path, cfg: Config, algorithm: dict | None = None) -> Path:
+    """A small table of ``cfg``'s layout and sensors at ``path`` (3 states, 3 episodes;
+    ``algorithm``: its header's record of a learner other than one-step Q)."""
+    layout = KeywordLayout(tuple(state_fields(cfg.sensors)))
+    meta: dict = {"sensors": sensor_signature(cfg), "episodes": 3}
+    if algorithm is not None:
+        meta["algorithm"] = algorithm
+    table = QTable(layout, meta, 0.0)
+    for i in range(3):
+        codes = [i % levels for _, levels in layout.fields]
+        table.row(layout.state_key(codes))[:] = [float(i), -1.0, 2.0, 0.0, 1.0]
+    path.write_bytes(table.to_bytes())
+    return path
+
+
 def header_of(data: bytes) -> dict:
     """The JSON header of a table file."""
     (hlen,) = struct.unpack_from("<I", data, len(MAGIC))

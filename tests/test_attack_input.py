@@ -24,8 +24,9 @@ from koolio_pymunk import robot_runtime as rt
 from koolio_pymunk.apps import cli
 from koolio_pymunk.apps.export import policy_document, write_policy
 from koolio_pymunk.apps.sweep import load_spec
+from koolio_pymunk.learning.qtable import QTable
 from koolio_pymunk.store.config import Config, apply_world
-from koolio_pymunk.store.errors import ArenaError
+from koolio_pymunk.store.errors import ArenaError, KoolioError
 from koolio_pymunk.world.arena import (
     MAX_ENTRIES,
     MAX_POLYGON_POINTS,
@@ -152,17 +153,19 @@ def test_malformed_table_in_every_command(here: Path, capsys, case: str, command
 @pytest.mark.parametrize(
     ("command", "fragment"),
     [
-        ("export", "sensors.sonar_groups: must be a list of lists of sonar indices"),
+        ("export", "sensors.sonar_groups: table made for 'x', this run uses [[0], [1, 2]"),
         ("eval", "sensors.sonar_groups: table made for 'x', this run uses [[0], [1, 2]"),
         ("init", "sensors.sonar_groups: table made for 'x'"),
     ],
 )
 def test_a_sensor_signature_item_of_the_wrong_kind(here: Path, capsys, command, fragment):
-    """Each use checks the signature: export builds the encoding from it, training and
-    evaluation compare it with the run's."""
-    (here / "bad.qtable").write_bytes(edit_header(small_table().to_bytes(), **{
-        "sensors.sonar_groups": "x"}))  # fmt: skip
+    """Each use checks the signature: export, training and evaluation compare it with the
+    configuration's; the policy's encoding, built from it, checks its kinds too."""
+    data = edit_header(small_table().to_bytes(), **{"sensors.sonar_groups": "x"})
+    (here / "bad.qtable").write_bytes(data)
     expect_error(capsys, here, TABLE_COMMANDS[command], "bad.qtable: ", fragment)
+    with pytest.raises(KoolioError, match=r"^t\.qtable: sensors\.sonar_groups: must be a list of"):
+        policy_document(QTable.from_bytes(data, "t.qtable"), source="t.qtable")
 
 
 # -- policy files ----------------------------------------------------------------------------

@@ -258,6 +258,29 @@ def test_fuzz_policy_loaders(tmp_path: Path, kind: str) -> None:
         label = f"policy {kind} case {case}"
         _check(lambda: rt.Policy.load(str(path)), (rt.PolicyError,), label + " (robot)", path)
         _check(lambda: load_any_table(path), (KoolioError,), label + " (simulator)", path)
+        try:
+            policy = rt.Policy.load(str(path))
+        except rt.PolicyError:
+            continue
+        says_what_it_holds(json.loads(path.read_bytes()), policy, label)
+
+
+def says_what_it_holds(doc: dict, policy: rt.Policy, label: str) -> None:
+    """A policy that loads holds no derived item (``n_states``, ``greedy``, the layout's
+    bits and shifts) other than its entries and fields make it: a reader may act on that
+    item alone (audit: ``greedy[0].action: 9``, ``layout.total_bits: 99`` and a wrong
+    ``n_states`` loaded)."""
+    again = policy.to_document()
+    assert "n_states" not in doc or doc["n_states"] == again["n_states"], f"{label}: n_states"
+    if "greedy" in doc:  # other keys of an item are a later version's: not read
+        pairs = [(g["state"], g["action"]) for g in doc["greedy"]]
+        assert pairs == [(g["state"], g["action"]) for g in again["greedy"]], f"{label}: greedy"
+    lay, want = doc["layout"], again["layout"]
+    for key in ("action_bits", "total_bits", "n_actions"):
+        assert key not in lay or lay[key] == want[key], f"{label}: layout.{key} {lay[key]!r}"
+    for i, (field, fwant) in enumerate(zip(lay["fields"], want["fields"], strict=True)):
+        for key in ("bits", "shift", "levels"):
+            assert key not in field or field[key] == fwant[key], f"{label}: fields[{i}].{key}"
 
 
 def test_mutations_are_seeded() -> None:

@@ -36,7 +36,7 @@ import numpy as np
 import pytest
 import yaml
 from inputs import small_table, snapshot
-from test_fuzz import mutate_structure
+from test_fuzz import mutate_structure, says_what_it_holds
 
 from koolio_pymunk import robot_runtime as rt
 from koolio_pymunk.apps import cli
@@ -317,6 +317,7 @@ def test_fuzz_robot_runtime_policies(tmp_path):
         except Exception as exc:
             pytest.fail(f"{label}: {type(exc).__name__}: {exc}")
         learned += 1
+        says_what_it_holds(doc, policy, label)
         with limit(label):
             learner = rt.RobotLearner(policy, save_path=str(path), seed=case, goal="201")
             fields = policy.layout.levels

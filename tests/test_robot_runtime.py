@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import random
 import subprocess
 import sys
@@ -290,3 +291,70 @@ def test_the_check_refuses_what_would_fail_on_the_robot(tmp_path, capsys):
     assert out.startswith("usage: python robot_runtime.py [--] POLICY\n") and err == ""
     assert rt.main([]) == 2
     assert capsys.readouterr().err.startswith("robot_runtime: error: usage: ")
+
+
+@pytest.mark.parametrize(
+    ("edit", "problem"),
+    [
+        (
+            lambda d: d["greedy"][0].update(action=9),
+            "greedy[0].action: action 9 is not an action (0..4)",
+        ),
+        (lambda d: d["layout"].update(total_bits=99), "layout.total_bits: 99, expected 27"),
+        (lambda d: d.update(n_states=7), "n_states: 7, expected 200 (the states of entries)"),
+    ],
+)
+def test_both_readers_refuse_a_policy_whose_derived_items_disagree(tmp_path, capsys, edit, problem):
+    """The robot's check (``python robot_runtime.py``, standard library only) and the
+    package's loader (``koolio-pm export``/``eval``/``info --qtable``) refuse the same
+    file in the same words (audit: all three loaded without complaint)."""
+    from inputs import expect_error
+
+    doc = policy_document(_table())
+    assert doc["n_states"] == 200  # the premise of the expected counts
+    edit(doc)
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(doc))
+    p = subprocess.run(
+        [sys.executable, "-I", "-S", str(RUNTIME), str(bad)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert (p.returncode, p.stdout) == (2, "")
+    assert p.stderr == f"robot_runtime: error: {bad}: {problem}\n"
+    for argv in (["export", "--out", str(tmp_path / "o.json")], ["info"]):
+        line = expect_error(capsys, tmp_path, [*argv, "--qtable", str(bad)])
+        assert line == f"koolio-pm: error: {bad}: {problem}"
+
+
+def test_a_reader_that_leaves_early_ends_the_check_quietly(policy_file):
+    """``python robot_runtime.py policy.json | head -2``: the reader closes the pipe, and
+    the check ends as ``koolio-pm`` does, exit 0 and nothing on stderr (audit: a
+    BrokenPipeError traceback). The pipe is closed before the process starts, so every
+    write to it fails, at once."""
+    root = Path(__file__).resolve().parent.parent
+    env = {**os.environ, "PYTHONPATH": str(root)}
+    for argv in (
+        [sys.executable, "-I", "-S", str(RUNTIME), str(policy_file)],
+        [sys.executable, "-I", "-S", str(RUNTIME), "--help"],
+        [sys.executable, "-m", "koolio_pymunk", "info"],  # the behaviour it matches
+    ):
+        read, write = os.pipe()
+        os.close(read)
+        try:
+            p = subprocess.run(
+                argv, stdout=write, stderr=subprocess.PIPE, text=True, timeout=60, env=env
+            )
+        finally:
+            os.close(write)
+        assert (p.returncode, p.stderr) == (0, ""), (argv, p.stderr)
+    p = subprocess.run(  # the premise: the same check, read to the end, prints 4 lines
+        [sys.executable, "-I", "-S", str(RUNTIME), str(policy_file)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert p.returncode == 0 and len(p.stdout.splitlines()) == 4, p.stdout

@@ -796,7 +796,11 @@ def cmd_check_arena(args: argparse.Namespace) -> int:
 
 
 def cmd_info(args: argparse.Namespace) -> int:
-    from ..learning.qtable import describe_goal, describe_world, human_bytes
+    """``info``: the state-space sizes of the paper's first design and of a layout, the
+    layout's keyword, and a table's figures. The layout is the configuration's (``--config``,
+    or the defaults); given a table and no ``--config``, it is the table's own (its
+    header's). A table that is not the configuration's says so, in ``eval``'s words."""
+    from ..learning.qtable import human_bytes
     from ..store.config import load_config, state_fields
     from ..store.keyword import PAPER_ORIGINAL_FIELDS, KeywordLayout
     from .export import load_any_table
@@ -805,39 +809,74 @@ def cmd_info(args: argparse.Namespace) -> int:
     table = load_any_table(args.qtable) if args.qtable else None  # a bad one: its line only
     paper = KeywordLayout(PAPER_ORIGINAL_FIELDS)
     now = KeywordLayout(tuple(state_fields(cfg.sensors)))
+    own = table is not None and args.config is None  # the table's layout, not the defaults'
+    title = f"this table ({args.qtable}: the layout in its header)" if own else "this configuration"
+    shown = table.layout if own else now
     print("State space (paper §5.4.8; dense tables of 8-byte doubles):")
-    for title, lay in (
+    for heading, lay in (
         ("paper's first design (compass, 6 cameras x 4, 8 sonars x 5)", paper),
-        ("this configuration", now),
+        (title, shown),
     ):
-        print(f"  {title}:")
+        print(f"  {heading}:")
         print(f"    states  {lay.n_states:>16,}")
         print(f"    entries {lay.n_entries:>16,}  (x {lay.n_actions} actions)")
         print(f"    dense   {human_bytes(lay.dense_bytes()):>16}")
-    print(f"Keyword ({now.total_bits} bits, Table 12):")
-    print("  " + " | ".join(f"{n}<<{s}" for (n, _), s in zip(now.fields, now.shifts)) + " | Action")
+    print(f"Keyword ({shown.total_bits} bits, Table 12):")
+    print(f"  {_keyword_line(shown)}")
     if table is not None:
-        share = table.entries / table.layout.n_entries
-        print(
-            f"Q-table {args.qtable}: {len(table):,} states visited, {table.entries:,} entries "
-            f"({share:.3%} of dense), {human_bytes(table.nbytes())} in the file, "
-            f"{table.meta.get('episodes', 0)} episodes"
-        )
-        arena = table.meta.get("arena")
-        if isinstance(arena, dict):
-            print(
-                f"  learned in arena {arena.get('name')} for {describe_goal(table.meta)}, "
-                f"in {describe_world(table.meta)}"
-            )
-        rec = table.meta.get("algorithm")
-        if isinstance(rec, dict):
-            params = ", ".join(f"{k} {v}" for k, v in rec.items() if k != "name")
-            sections = ", ".join(f"{k} {human_bytes(len(v))}" for k, v in table.sections.items())
-            print(
-                f"  learned with {rec.get('name')} ({params})"
-                + (f"; {sections}" if sections else "")
-            )
+        _describe_table(table, args.qtable, cfg, args.config, shown)
     return 0
+
+
+def _keyword_line(layout) -> str:
+    """``GoalCam0<<25 | ... | Sonar7<<3 | Action``: a layout's fields and their shifts."""
+    return " | ".join(f"{n}<<{s}" for (n, _), s in zip(layout.fields, layout.shifts)) + " | Action"
+
+
+def _describe_table(table, path: str, cfg, config: str | None, shown) -> None:
+    """``info``'s lines on a table: its figures (the share of its own layout's dense
+    table, the file's size), where and how it was learned, and whether ``cfg`` (the
+    configuration ``config`` names, or the defaults) is the one it was made with."""
+    from ..learning.qtable import (
+        check_compatible,
+        describe_goal,
+        describe_world,
+        human_bytes,
+        sensor_signature,
+    )
+    from ..store.config import state_fields
+    from ..store.keyword import KeywordLayout
+
+    share = table.entries / table.layout.n_entries
+    size = os.stat(path).st_size
+    in_file = f"{size:,} bytes" + (f" ({human_bytes(size)})" if size >= 1024 else "")
+    print(
+        f"Q-table {path}: {len(table):,} states visited, {table.entries:,} entries "
+        f"({share:.3%} of its dense table), {in_file} in the file, "
+        f"{table.meta.get('episodes', 0)} episodes"
+    )
+    arena = table.meta.get("arena")
+    if isinstance(arena, dict):
+        print(
+            f"  learned in arena {arena.get('name')} for {describe_goal(table.meta)}, "
+            f"in {describe_world(table.meta)}"
+        )
+    rec = table.meta.get("algorithm")
+    if isinstance(rec, dict):
+        params = ", ".join(f"{k} {v}" for k, v in rec.items() if k != "name")
+        sections = ", ".join(f"{k} {human_bytes(len(v))}" for k, v in table.sections.items())
+        print(
+            f"  learned with {rec.get('name')} ({params})" + (f"; {sections}" if sections else "")
+        )
+    if table.layout != shown:
+        print(f"  its keyword ({table.layout.total_bits} bits): {_keyword_line(table.layout)}")
+    layout = KeywordLayout(tuple(state_fields(cfg.sensors)))
+    try:
+        check_compatible(table, layout, sensor_signature(cfg), path)
+    except KoolioError as exc:
+        which = f"--config {config}" if config else "the default configuration (no --config)"
+        problem = str(exc).removeprefix(f"{path}: ")
+        print(f"  not a table of {which}: {problem}")
 
 
 def _cached(dispatcher) -> bool:

@@ -8,13 +8,19 @@ the keyword layout, and the sensor thresholds the robot needs to encode raw read
 keeps learning that policy on the robot and saves it back in the same format.
 
 The robot's learning settings (``learner``: alpha, gamma, epsilon, and the algorithm with
-its parameters when it is not one-step Q) come from ``--config``, like the rewards. A
+its parameters when it is not one-step Q) come from ``--config``, like the rewards: the
+configuration the table was learned with (:func:`check_configuration` refuses another
+keyword layout, sensor signature or algorithm, as ``eval`` and ``train`` do). A
 Dyna-Q model is never exported (it describes the simulated world, and the robot builds its
 own from real steps), nor read back from a policy file.
 
 The input may be a ``.qtable`` file or a policy file (e.g. one back from the robot); an
 ``--out`` name ending in ``.qtable`` writes the simulator's binary format instead, so a
 table learned on the robot can be evaluated or viewed with the other commands.
+
+``--out`` replaces an earlier policy file, and nothing else (:func:`check_replaceable`):
+a ``.qtable`` output is always a new file, since an exported table cannot be told from
+a trained one.
 
 :func:`load_any_table` reads either format (``koolio-pm train --init-qtable``).
 """
@@ -30,9 +36,17 @@ from pathlib import Path
 from typing import Any
 
 from .. import robot_runtime as rt
-from ..learning.algorithms import algorithm_record
-from ..learning.qtable import MAGIC, MAX_TABLE_BYTES, RECORD_KEYS, QTable
-from ..store.config import Config, load_config
+from ..learning.algorithms import algorithm_record, check_algorithm
+from ..learning.qtable import (
+    MAGIC,
+    MAX_TABLE_BYTES,
+    RECORD_KEYS,
+    QTable,
+    backup_path,
+    check_compatible,
+    sensor_signature,
+)
+from ..store.config import Config, load_config, state_fields
 from ..store.errors import FileError, QTableError, located
 from ..store.files import atomic_write, check_path, read_bytes
 from ..store.keyword import KeywordLayout
@@ -50,13 +64,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--out",
         required=True,
-        help="policy file to write (JSON); a name ending in .qtable writes the binary format",
+        help="policy file to write (JSON; an earlier policy file is replaced, no other "
+        "file); a name ending in .qtable writes the binary format to a new file",
     )
     p.add_argument(
         "--config",
         default=None,
-        help="YAML configuration whose learner (alpha, gamma, epsilon) and rewards go into "
-        "the policy as the robot's defaults (default: built-in defaults)",
+        help="YAML configuration or profile the table was learned with: its learner (alpha, "
+        "gamma, epsilon, algorithm) and rewards go into the policy as the robot's defaults; "
+        "a table of another keyword layout, sensors or algorithm is refused, as eval "
+        "refuses it (default: built-in defaults)",
     )
     p.add_argument(
         "--world",
@@ -86,6 +103,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"wrote {out}: {len(table)} states, {table.meta.get('episodes', 0)} episodes")
         return 0
     cfg = load_config(args.config, world=args.world)
+    check_configuration(table, cfg, args.qtable)
     doc = policy_document(table, cfg, episode=args.episode, source=args.qtable)
     if args.world is not None:
         doc["world"] = str(args.world)
@@ -101,10 +119,28 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def check_configuration(table: QTable, cfg: Config, source: str) -> None:
+    """Refuse to export ``table`` with a configuration it was not learned with, as
+    ``eval`` refuses to score it (:func:`~koolio_pymunk.learning.qtable.check_compatible`:
+    its keyword layout and sensors, naming the shipped profile that made it), and as
+    ``train`` refuses to continue it with another learning algorithm: the policy's
+    learner and rewards come from the configuration, and the robot goes on learning with
+    them."""
+    layout = KeywordLayout(tuple(state_fields(cfg.sensors)))
+    check_compatible(table, layout, sensor_signature(cfg), source)
+    check_algorithm(table, cfg.learner, source, "give export the --config it was learned with")
+
+
 def check_replaceable(out: Path, kind: str) -> None:
-    """Refuse to replace an existing ``out`` that is not a file of ``kind`` (``"table"``: a
-    ``.qtable`` file; ``"policy"``: a koolio-policy file): ``--out`` replaces an earlier
-    export, never a log, a configuration or anyone's document (FileError, one line).
+    """Refuse to write ``out`` where it would replace a file that is not an earlier export
+    of ``kind`` (FileError, one line; nothing changed).
+
+    ``"policy"``: an existing ``out`` must be a koolio-policy file (an earlier export,
+    replaced); a log, a configuration, a Q-table or anyone's document is refused.
+    ``"table"`` (``--out X.qtable``): ``out`` must be new, and so must its backup
+    ``X.qtable.bak``: an exported table's bytes are those of a trained one, so no
+    existing ``.qtable`` file can be told to be an earlier export, and a table's place
+    (its file, or the backup a run would resume from) is never taken.
 
     >>> import tempfile
     >>> notes = Path(tempfile.mkdtemp()) / "notes.json"
@@ -113,20 +149,35 @@ def check_replaceable(out: Path, kind: str) -> None:
     Traceback (most recent call last):
     koolio_pymunk.store.errors.FileError: .../notes.json: --out: exists and is not a koolio-po...
     """
-    try:
-        if not stat.S_ISREG(os.stat(out).st_mode):
-            return  # a FIFO, a device...: the write refuses it and says what it is
-    except OSError:  # missing (a new file), or the write itself says why
+    if kind == "table":
+        for path in (out, backup_path(out)):
+            if _is_regular(path):
+                problem = (
+                    "exists, and export writes a .qtable file only under a new name (it "
+                    "never replaces a Q-table): choose another name or remove it"
+                )
+                if path != out:
+                    problem = f"a table's backup {path} exists beside it: choose another name"
+                raise FileError(located(str(out), "--out", problem))
         return
-    table = kind == "table"
-    want = "a .qtable file" if table else f"a {rt.FORMAT} file"
+    if not _is_regular(out):
+        return  # missing (a new file), a FIFO, a device...: the write says what it is
+    want = f"a {rt.FORMAT} file"
     try:
-        data = read_bytes(out, MAX_TABLE_BYTES if table else rt.MAX_POLICY_BYTES, want)
+        data = read_bytes(out, rt.MAX_POLICY_BYTES, want)
     except FileError:  # unreadable, too large, not a regular file: not ours to replace
         data = b""
-    if not (data[: len(MAGIC)] == MAGIC if table else _is_policy(data)):
+    if not _is_policy(data):
         problem = f"exists and is not {want}: choose another name or remove it"
         raise FileError(located(str(out), "--out", problem))
+
+
+def _is_regular(path: Path) -> bool:
+    """``path`` is an existing regular file (or a link to one)."""
+    try:
+        return stat.S_ISREG(os.stat(path).st_mode)
+    except OSError:  # missing, or the write itself says why
+        return False
 
 
 def _is_policy(data: bytes) -> bool:

@@ -77,6 +77,23 @@ def attach(table: QTable, cfg: LearnerConfig, source: str) -> None:
     parameters may change. ``--init-qtable`` starts a new table from another's Q values
     with any algorithm (:func:`adopt`).
     """
+    remedy = f"start a new table from its Q values: --init-qtable {source} --qtable NEW"
+    check_algorithm(table, cfg, source, remedy)
+    _record(table, cfg)
+
+
+def check_algorithm(table: QTable, cfg: LearnerConfig, source: str, remedy: str) -> None:
+    """Refuse ``cfg``'s algorithm for a table that has learned something with another
+    one (QTableError, one line ending in ``(remedy)``): a run continuing it
+    (:func:`attach`), or a policy exported for the robot to continue it.
+
+    >>> from koolio_pymunk.store.keyword import KeywordLayout
+    >>> t = QTable(KeywordLayout((("A", 3),)), {"algorithm": {"name": "dyna"}, "episodes": 2})
+    >>> check_algorithm(t, LearnerConfig(algorithm="dyna"), "t.qtable", "")
+    >>> check_algorithm(t, LearnerConfig(), "t.qtable", "give its --config")
+    Traceback (most recent call last):
+    koolio_pymunk.store.errors.QTableError: t.qtable: algorithm: table learned with dyna, this ...
+    """
     theirs = table_algorithm(table, source)
     learned = bool(table.rows) or int(table.meta.get("episodes", 0)) > 0
     if learned and theirs != cfg.algorithm:
@@ -84,11 +101,9 @@ def attach(table: QTable, cfg: LearnerConfig, source: str) -> None:
             located(
                 source,
                 "algorithm",
-                f"table learned with {theirs}, this run uses {cfg.algorithm} (start a new "
-                f"table from its Q values: --init-qtable {source} --qtable NEW)",
+                f"table learned with {theirs}, this run uses {cfg.algorithm} ({remedy})",
             )
         )
-    _record(table, cfg)
 
 
 def adopt(table: QTable, cfg: LearnerConfig, source: str) -> None:

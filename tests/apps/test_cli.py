@@ -283,3 +283,63 @@ def test_info_of_a_bad_table_says_only_that(tmp_path, capsys):
     assert out == ""
     want = "neither a .qtable file nor a koolio-policy (JSON) file"
     assert err == f"koolio-pm: error: {bad}: {want}\n"
+
+
+def test_info_describes_the_tables_own_layout(tmp_path, capsys) -> None:
+    """``info --qtable`` describes the layout the table records, not the defaults', and
+    says when the configuration is not the table's (audit: a 35-bit table was printed
+    under the default 27-bit keyword, its share of the dense table computed against the
+    35-bit one); "in the file" is the file's size (it was the rows' bytes: 16.5 KiB for
+    files of 17,643 and 89,019 bytes)."""
+    from inputs import table_file
+
+    from koolio_pymunk.apps.export import policy_document, write_policy
+    from koolio_pymunk.learning.qtable import load_qtable
+    from koolio_pymunk.store.config import load_config
+
+    qlambda = {"name": "qlambda", "trace_cutoff": 0.01, "trace_decay": 0.9}
+    mem = table_file(tmp_path / "mem.qtable", load_config("paper-memory-qlambda"), qlambda)
+    plain = table_file(tmp_path / "plain.qtable", load_config())
+    pol = tmp_path / "plain.json"
+    write_policy(policy_document(load_qtable(plain)), pol)
+
+    def in_file(path: Path) -> str:
+        size = path.stat().st_size
+        return f"{size:,} bytes" + (f" ({size / 1024:.1f} KiB)" if size >= 1024 else "")
+
+    def info(*argv: str) -> list[str]:
+        assert main(["info", *argv]) == 0
+        out, err = capsys.readouterr()
+        assert err == ""
+        return out.splitlines()
+
+    lines = info("--qtable", str(mem))
+    assert lines[5:9] == [
+        f"  this table ({mem}: the layout in its header):",
+        f"    states  {358_318_080:>16,}",
+        f"    entries {1_791_590_400:>16,}  (x 5 actions)",
+        "    dense           13.3 GiB",
+    ]
+    assert lines[9] == "Keyword (35 bits, Table 12):"
+    assert lines[10].endswith("GoalMemory<<9 | LastAction<<6 | GoalBearing<<3 | Action")
+    assert lines[11] == (
+        f"Q-table {mem}: 3 states visited, 15 entries (0.000% of its dense table), "
+        f"{in_file(mem)} in the file, 3 episodes"
+    )
+    assert lines[12] == "  learned with qlambda (trace_cutoff 0.01, trace_decay 0.9)"
+    assert lines[13].startswith(
+        "  not a table of the default configuration (no --config): layout: table made for "
+        "35-bit keyword"
+    )
+    assert lines[13].endswith("add --config paper-memory-qlambda)") and len(lines) == 14
+    lines = info("--qtable", str(mem), "--config", "paper-memory-qlambda")
+    assert lines[5] == "  this configuration:" and len(lines) == 13  # its own: no remark
+    lines = info("--qtable", str(plain), "--config", "paper-memory")
+    assert lines[5:7] == ["  this configuration:", f"    states  {71_663_616:>16,}"]
+    assert lines[9] == "Keyword (32 bits, Table 12):"
+    assert lines[12].startswith("  its keyword (27 bits): GoalCam0<<25 | ")
+    assert lines[13].startswith("  not a table of --config paper-memory: layout: table made")
+    assert lines[13].endswith("(it was made with the default configuration: leave out --config)")
+    for path in (plain, pol):  # the file's own size, whichever format
+        assert f", {in_file(path)} in the file, 3 episodes" in info("--qtable", str(path))[11]
+    assert pol.stat().st_size > 2 * plain.stat().st_size  # the premise: the sizes differ

@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 import pytest
-from inputs import expect_error
+from inputs import expect_error, table_file
 
 from koolio_pymunk import robot_runtime as rt
 from koolio_pymunk.apps import cli
@@ -192,6 +192,14 @@ def test_init_qtable_refuses_other_sensor_layout(trained, tmp_path, capsys):
         (lambda d: d["layout"]["fields"][0].update(shift=24), "fields[0].shift: 24, expected 25"),
         (lambda d: d["encoding"]["thresholds"].update(sonar=[6, 5]), "must be increasing"),
         (lambda d: d.pop("sensors"), "sensors: missing"),
+        (lambda d: d["greedy"][0].update(action=9), "greedy[0].action: action 9 is not an action"),
+        (lambda d: d["greedy"][1].update(action=True), "greedy[1]: needs an integer state and"),
+        (lambda d: d["greedy"].pop(), "greedy: 163 items, expected 164 (one per state of"),
+        (lambda d: d["greedy"].reverse(), "greedy[0].state: "),
+        (lambda d: d["layout"].update(total_bits=99), "layout.total_bits: 99, expected 27"),
+        (lambda d: d["layout"].update(total_bits="27"), "layout.total_bits: '27', expected 27"),
+        (lambda d: d.update(n_states=d["n_states"] + 1), "n_states: 165, expected 164 (the states"),
+        (lambda d: d.update(n_states=None), "n_states: None, expected 164"),
     ],
 )
 def test_bad_policy_files_are_refused_in_one_line(trained, tmp_path, edit, message):
@@ -205,6 +213,33 @@ def test_bad_policy_files_are_refused_in_one_line(trained, tmp_path, edit, messa
     assert message in str(info.value)
     assert str(info.value).startswith(str(bad))
     assert "\n" not in str(info.value)
+
+
+def test_the_greedy_list_is_the_entries_greedy_actions(trained, tmp_path):
+    """``greedy`` is checked against the entries: an action that is in range but not the
+    state's greedy one is refused (a reader acting on ``greedy`` alone would do otherwise
+    than the robot); a file without the derived items still loads."""
+    _, table, _ = trained
+    doc = policy_document(table)
+    state, row = next((s, r) for s, r in sorted(table.rows.items()) if len(set(r)) > 1)
+    i = sorted(table.rows).index(state)
+    best = row.index(max(row))
+    other = next(a for a in range(5) if row[a] != row[best])
+    doc["greedy"][i]["action"] = other
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(doc))
+    message = (
+        f"{bad}: greedy[{i}].action: {other} is not the greedy action of state {state} "
+        f"(expected {best})"
+    )
+    with pytest.raises(QTableError) as info:
+        load_any_table(bad)
+    assert str(info.value) == message
+    for key in ("greedy", "n_states"):
+        del doc[key]
+    del doc["layout"]["total_bits"]
+    bad.write_text(json.dumps(doc))
+    assert load_any_table(bad).rows == table.rows
 
 
 def test_non_table_files_are_refused(tmp_path, capsys):
@@ -222,8 +257,8 @@ def test_non_table_files_are_refused(tmp_path, capsys):
 
 
 def test_out_replaces_only_a_file_of_its_kind(trained, tmp_path, capsys):
-    """``--out`` replaces an earlier export (policy or table), never another file, and
-    never one a running command holds (a training run's log: newcomer audit)."""
+    """``--out`` replaces an earlier policy file, never another file, and never one a
+    running command holds (a training run's log: newcomer audit)."""
     _, _, path = trained
     work = tmp_path / "w"
     work.mkdir()
@@ -236,11 +271,104 @@ def test_out_replaces_only_a_file_of_its_kind(trained, tmp_path, capsys):
     export = ["export", "--qtable", str(path), "--out"]
     expect_error(capsys, work, [*export, str(log)], "run.csv: --out: exists and is not a")
     expect_error(capsys, work, [*export, str(notes)], "notes.json: --out: exists and is not a")
-    expect_error(capsys, work, [*export, str(table_like)], "other.qtable: --out: exists and")
-    pol, back = work / "p.json", work / "b.qtable"
-    for _ in range(2):  # an earlier export of each kind is replaced
+    expect_error(capsys, work, [*export, str(table_like)], "other.qtable: --out: exists, and")
+    pol = work / "p.json"
+    for _ in range(2):  # an earlier policy file is replaced
         assert cli.main([*export, str(pol)]) == 0
-        assert cli.main(["export", "--qtable", str(pol), "--out", str(back)]) == 0
     capsys.readouterr()
     with FileLock(pol, "koolio-pm train"):  # in use: refused, left as it was
         expect_error(capsys, work, [*export, str(pol)], "p.json: in use by process")
+
+
+def test_out_never_replaces_a_table(trained, tmp_path, capsys):
+    """A trained Q-table is never replaced (audit: ``--out t.qtable`` wrote another
+    table over it, exit 0, its ``.bak`` one episode behind), whatever its name; nor is a
+    table's backup taken over. A ``.qtable`` output is a new file, and a policy file is
+    still replaced by the next export."""
+    _, _, path = trained
+    work = tmp_path / "w"
+    work.mkdir()
+    other = work / "other.json"
+    assert cli.main(["export", "--qtable", str(path), "--out", str(other)]) == 0
+    mine = work / "t.qtable"
+    mine.write_bytes(path.read_bytes())
+    (work / "t.qtable.bak").write_bytes(path.read_bytes())
+    (work / "gone.qtable.bak").write_bytes(path.read_bytes())
+    (work / "raw").write_bytes(path.read_bytes())  # a table under another name
+    capsys.readouterr()
+    from_other = ["export", "--qtable", str(other), "--out"]
+    line = expect_error(capsys, work, [*from_other, str(mine)], "t.qtable: --out: exists, and")
+    assert line == (
+        f"koolio-pm: error: {mine}: --out: exists, and export writes a .qtable file only "
+        "under a new name (it never replaces a Q-table): choose another name or remove it"
+    )
+    expect_error(
+        capsys,
+        work,
+        [*from_other, str(work / "gone.qtable")],
+        f"gone.qtable: --out: a table's backup {work / 'gone.qtable.bak'} exists beside it",
+    )
+    expect_error(capsys, work, [*from_other, str(work / "raw")], "raw: --out: exists and is not")
+    expect_error(capsys, work, [*from_other, str(mine) + ".bak"], "t.qtable.bak: --out: exists")
+    new = work / "new.qtable"
+    assert cli.main([*from_other, str(new)]) == 0
+    assert new.read_bytes() == path.read_bytes()
+    expect_error(capsys, work, [*from_other, str(new)], "new.qtable: --out: exists, and")
+    assert cli.main(["export", "--qtable", str(new), "--out", str(other)]) == 0  # a policy
+
+
+def test_export_checks_the_table_against_the_configuration(tmp_path, capsys):
+    """export refuses a table its configuration did not make, in the line ``eval`` gives
+    (audit: a paper-memory-qlambda table exported without --config became a one-step Q
+    policy with the default alpha, epsilon and rewards; a 27-bit table exported with the
+    32-bit paper-memory configuration was accepted); with its own --config the policy
+    carries that configuration's learner and rewards."""
+    mem_cfg = load_config("paper-memory-qlambda")
+    qlambda = {"name": "qlambda", "trace_cutoff": 0.01, "trace_decay": 0.9}
+    mem = table_file(tmp_path / "mem.qtable", mem_cfg, qlambda)
+    plain = table_file(tmp_path / "plain.qtable", load_config())
+    dyna = table_file(
+        tmp_path / "dyna.qtable", load_config(), {"name": "dyna", "planning_steps": 5}
+    )
+    out = str(tmp_path / "x.json")
+    line = expect_error(
+        capsys, tmp_path, ["export", "--qtable", str(mem), "--out", out], "mem.qtable: layout:"
+    )
+    assert line.endswith(
+        "(it was made with the shipped profile 'paper-memory-qlambda': add --config "
+        "paper-memory-qlambda)"
+    )
+    evals = ["eval", "--qtable", str(mem), "--episodes", "1"]
+    assert expect_error(capsys, tmp_path, evals) == line  # the same refusal as eval's
+    line = expect_error(
+        capsys,
+        tmp_path,
+        ["export", "--qtable", str(plain), "--config", "paper-memory", "--out", out],
+        "plain.qtable: layout: table made for 27-bit keyword",
+    )
+    assert "this run uses 32-bit keyword" in line
+    assert line.endswith("(it was made with the default configuration: leave out --config)")
+    expect_error(
+        capsys,
+        tmp_path,
+        ["export", "--qtable", str(plain), "--config", "paper", "--out", out],
+        "plain.qtable: sensors.camera_sensors_deg: table made for [0.0, 45.0, -45.0], this "
+        "run uses [0.0, 90.0, -90.0]",
+    )
+    line = expect_error(capsys, tmp_path, ["export", "--qtable", str(dyna), "--out", out])
+    assert line == (
+        f"koolio-pm: error: {dyna}: algorithm: table learned with dyna, this run uses q "
+        "(give export the --config it was learned with)"
+    )
+    argv = ["export", "--qtable", str(mem), "--config", "paper-memory-qlambda", "--out", out]
+    assert cli.main(argv) == 0
+    doc = json.loads((tmp_path / "x.json").read_text())
+    assert doc["learner"] == {
+        "alpha": 0.07,
+        "gamma": mem_cfg.learner.gamma,
+        "epsilon": 0.01,
+        "algorithm": "qlambda",
+        "trace_decay": 0.9,
+        "trace_cutoff": mem_cfg.learner.trace_cutoff,
+    }
+    assert doc["rewards"]["bump"] == -12.0 and doc["layout"]["total_bits"] == 35
