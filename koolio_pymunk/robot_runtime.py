@@ -76,6 +76,9 @@ VERSION = 1
 MAX_POLICY_BYTES = 1 << 30
 #: Learning algorithms (``learner.algorithm``; absent means ``q``) and their parameters.
 ALGORITHMS = {"q": (), "qlambda": ("trace_decay", "trace_cutoff"), "dyna": ("planning_steps",)}
+#: By action index: the action that undoes it (-1: none), for the no-undo rule of a policy
+#: whose ``learner.no_undo`` is true (the simulator's ``learning.action_rules.UNDO``).
+UNDO = (-1, 2, 1, 4, 3)
 #: Most simulated updates per real step (``learner.planning_steps``; the simulator's
 #: configuration has the same limit): 1e12 made every step last for days.
 MAX_PLANNING_STEPS = 10_000
@@ -433,6 +436,8 @@ class Policy:
         self.learner: dict[str, Any] = dict(doc.get("learner") or {})
         self.algorithm = str(self.learner.get("algorithm", "q"))
         """``q``, ``qlambda`` or ``dyna`` (the file's ``learner.algorithm``)."""
+        self.no_undo = self.learner.get("no_undo") is True
+        """The file's ``learner.no_undo``: never choose the action that undoes the last."""
         self.model = (
             Model.from_json(doc.get("model"), self.layout) if self.algorithm == "dyna" else None
         )
@@ -554,25 +559,35 @@ class Policy:
         r = self.rows.get(state)
         return list(r) if r is not None else [self.q_init] * self.layout.n_actions
 
-    def greedy_actions(self, state: int) -> list[int]:
-        """Every action of highest Q (all actions for a state never visited)."""
-        r = self.q(state)
-        best = max(r)
-        return [a for a, v in enumerate(r) if v == best]
+    def barred(self, last: int) -> int:
+        """The action the policy's no-undo rule bars after the action ``last`` (-1: none;
+        none when the rule is off or ``last`` is -1, no action yet)."""
+        return UNDO[last] if self.no_undo and 0 <= last < len(UNDO) else -1
 
-    def greedy(self, state: int, rng: random.Random | None = None) -> int:
-        """An action of highest Q; ties broken uniformly at random (as the simulator),
-        or the lowest index when ``rng`` is None."""
-        ties = self.greedy_actions(state)
+    def greedy_actions(self, state: int, bar: int = -1) -> list[int]:
+        """Every action of highest Q but ``bar`` (all of them for a state never visited)."""
+        r = self.q(state)
+        best = max(v for a, v in enumerate(r) if a != bar)
+        return [a for a, v in enumerate(r) if v == best and a != bar]
+
+    def greedy(self, state: int, rng: random.Random | None = None, bar: int = -1) -> int:
+        """An action of highest Q but ``bar``; ties broken uniformly at random (as the
+        simulator), or the lowest index when ``rng`` is None."""
+        ties = self.greedy_actions(state, bar)
         if len(ties) == 1 or rng is None:
             return ties[0]
         return ties[rng.randrange(len(ties))]
 
-    def act(self, state: int, epsilon: float, rng: random.Random) -> int:
-        """epsilon-greedy: a uniform random action with probability ``epsilon``."""
+    def act(self, state: int, epsilon: float, rng: random.Random, last: int = -1) -> int:
+        """epsilon-greedy: a uniform random action with probability ``epsilon``; with the
+        no-undo rule, never the one that undoes ``last`` (the action taken before)."""
+        bar = self.barred(last)
         if epsilon > 0.0 and rng.random() < epsilon:
-            return rng.randrange(self.layout.n_actions)
-        return self.greedy(state, rng)
+            if bar < 0:
+                return rng.randrange(self.layout.n_actions)
+            k = rng.randrange(self.layout.n_actions - 1)
+            return k + 1 if k >= bar else k
+        return self.greedy(state, rng, bar)
 
     def update(
         self,
@@ -777,7 +792,9 @@ def validate_document(doc: Any, source: str = "<policy>") -> None:
     * ``learner``: ``alpha`` in (0, 1], ``gamma`` and ``epsilon`` in [0, 1]: defaults
       for the robot; for a learner other than one-step Q its ``algorithm`` (``qlambda``:
       with ``trace_decay`` in [0, 1] and ``trace_cutoff`` in [1e-6, 1); ``dyna``: with
-      ``planning_steps``, an integer in 0..:data:`MAX_PLANNING_STEPS`); ``rewards``: the
+      ``planning_steps``, an integer in 0..:data:`MAX_PLANNING_STEPS`); ``no_undo``
+      (``true`` or ``false``, absent: false): never choose the action that undoes the
+      last one (:data:`UNDO`); ``rewards``: the
       reward of each event (``goal, end_of_world, bump, stop, reverse, turn, forward``),
       each within +-:data:`MAX_REWARD`.
     * ``model`` (``dyna`` only, optional): the robot's model of its real transitions,
@@ -877,8 +894,10 @@ def _check_learner(sec: Any, source: str) -> None:
             "learner.algorithm",
             f"unknown algorithm {_show(algorithm)} (valid: {', '.join(ALGORITHMS)})",
         )
+    if "no_undo" in sec and not isinstance(sec["no_undo"], bool):
+        raise _err(source, "learner.no_undo", "must be true or false")
     for name, v in sec.items():
-        if name != "algorithm" and not is_number(v):
+        if name not in ("algorithm", "no_undo") and not is_number(v):
             raise _err(source, f"learner.{name}", "must be a finite number")
     for name, (ok, problem) in LEARNER_RANGES.items():
         if name in sec and name not in _PARAMETER_NAMES and not ok(sec[name]):
@@ -1335,6 +1354,8 @@ class RobotLearner:
         self.learn = learn
         self.goal = goal
         self.state: int | None = None
+        self.last = -1
+        """The action chosen last in this episode (-1: none yet, or a rescue since)."""
         self.traces: Traces | None = None
         """Q(lambda)'s traces (``qlambda`` only); they live within an episode."""
         if policy.algorithm == "qlambda":
@@ -1345,6 +1366,7 @@ class RobotLearner:
     def begin(self, codes: Sequence[int]) -> None:
         """Start an episode from the first state's codes."""
         self.state = self.policy.state_key(codes)
+        self.last = -1
         if self.traces is not None:
             self.traces.clear()
         self.reward = 0.0
@@ -1355,9 +1377,11 @@ class RobotLearner:
     def choose(self) -> int:
         if self.state is None:
             raise PolicyError("choose: call begin() first")
-        action = self.policy.act(self.state, self.epsilon, self.rng)
-        if self.traces is not None and action not in self.policy.greedy_actions(self.state):
+        bar = self.policy.barred(self.last)
+        action = self.policy.act(self.state, self.epsilon, self.rng, self.last)
+        if self.traces is not None and action not in self.policy.greedy_actions(self.state, bar):
             self.traces.clear()  # Watkins's cut: an exploratory, non-greedy action
+        self.last = action
         return action
 
     def step(
@@ -1388,6 +1412,7 @@ class RobotLearner:
         if self.state is None:
             raise PolicyError("moved: call begin() first")
         self.state = self.policy.state_key(codes)
+        self.last = -1  # the next action undoes nothing
         self.rescued = True
 
     def learn_step(self, state: int, action: int, reward: float, nxt: int, terminal: bool) -> None:

@@ -159,11 +159,13 @@ def jobs_for(target: str, args: argparse.Namespace) -> list[dict[str, Any]]:
         ]  # fmt: skip
     if target == "default":
         out = []
-        labels = [("measured", extra)] + ([] if args.no_baseline else [("one-step Q", {})])
-        for label, ov in labels:
+        # the baseline is the default profile itself (one-step Q), whatever --config says
+        labels = [("measured", args.config, extra)]
+        labels += [] if args.no_baseline else [("one-step Q", None, {})]
+        for label, config, ov in labels:
             for s in args.seeds or [0, 1, 2]:
                 out.append(
-                    base | {"target": target, "label": label, "config": args.config,
+                    base | {"target": target, "label": label, "config": config,
                             "overrides": ov, "seed": s, "every": args.every,
                             "episodes": args.max_episodes, "stop": True}
                 )  # fmt: skip

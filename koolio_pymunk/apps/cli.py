@@ -634,6 +634,7 @@ def _seed_table(init_path: str, store, log: str, env) -> None:
 
 
 def cmd_eval(args: argparse.Namespace) -> int:
+    from ..learning.algorithms import check_rule
     from ..learning.qtable import check_compatible, sensor_signature
     from ..learning.training import evaluate
     from ..world.arena import arena_record
@@ -649,6 +650,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
     check_compatible(
         table, env.layout, sensor_signature(env.config), args.qtable, arena_record(env.arena)
     )
+    check_rule(table, env.config.learner, args.qtable, "give eval the --config it was learned with")
     warn_table(table, args.qtable, env, policy)
     goals = env.arena.goal_names() if goal_all else [None]
     announce_compile(env)

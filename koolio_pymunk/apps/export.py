@@ -291,8 +291,9 @@ def check_sensor_signature(sensors: dict[str, Any], source: str) -> None:
 
 
 def _algorithm(cfg: Config) -> dict[str, Any]:
-    """The ``learner`` keys of a non-default algorithm (none for one-step Q). The Dyna-Q
-    model is not exported: it describes the simulated world; the robot builds its own."""
+    """The ``learner`` keys of a non-default algorithm or choice rule (none for one-step
+    Q without the no-undo rule). The Dyna-Q model is not exported: it describes the
+    simulated world; the robot builds its own."""
     rec = algorithm_record(cfg.learner)
     if rec is None:
         return {}
@@ -318,9 +319,10 @@ def table_from_policy(policy: rt.Policy) -> QTable:
     for key in RECORD_KEYS:
         if isinstance(policy.extra.get(key), str):
             meta[key] = policy.extra[key]
-    if policy.algorithm != "q":  # the robot's Dyna-Q model stays with the robot
+    if policy.algorithm != "q" or policy.no_undo:  # the robot's Dyna-Q model stays there
         params = {k: policy.learner[k] for k in rt.ALGORITHMS[policy.algorithm]}
-        meta["algorithm"] = {"name": policy.algorithm} | params
+        rule = {"no_undo": True} if policy.no_undo else {}
+        meta["algorithm"] = {"name": policy.algorithm} | params | rule
     rows = {k: list(v) for k, v in policy.rows.items()}
     return QTable(layout, meta, policy.q_init, rows)
 

@@ -183,6 +183,26 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--dry-run", action="store_true", help="list the runs and exit")
 
 
+#: Settings added after sweeps existed, left out of a configuration's digest at their
+#: neutral value, so an earlier sweep's folder keeps its configuration ids: (section,
+#: key) -> neutral value.
+ADDED_LATER = {("learner", "no_undo"): False}
+
+
+def digest_view(config: dict[str, Any]) -> dict[str, Any]:
+    """The configuration as its id's digest sees it: :data:`ADDED_LATER`'s settings at
+    their neutral value left out.
+
+    >>> digest_view({"learner": {"alpha": 0.2, "no_undo": False}})
+    {'learner': {'alpha': 0.2}}
+    """
+    out = {k: dict(v) if isinstance(v, dict) else v for k, v in config.items()}
+    for (section, key), neutral in ADDED_LATER.items():
+        if out.get(section, {}).get(key, neutral) == neutral:
+            out.get(section, {}).pop(key, None)
+    return out
+
+
 def run(args: argparse.Namespace) -> int:
     spec = load_spec(args.spec)
     if args.world is not None:
@@ -473,7 +493,8 @@ def plan(spec: SweepSpec) -> list[dict[str, Any]]:
                 "eval_episodes": spec.eval_episodes,
                 "competence": spec.competence,
             }
-            hashed = {**settings, "arena_content": repr(arena_obj)}
+            hashed = {**settings, "config": digest_view(settings["config"]),
+                      "arena_content": repr(arena_obj)}  # fmt: skip
             digest = hashlib.sha256(
                 json.dumps(hashed, sort_keys=True, default=str).encode()
             ).hexdigest()[:8]

@@ -66,6 +66,7 @@ from typing import Any
 import numpy as np
 
 from .. import robot_runtime as rt
+from ..learning.algorithms import check_rule
 from ..learning.episodes import EVAL_STREAM, ROBOT_STREAM, Episodes
 from ..learning.qtable import QTable, QTableStore, check_compatible, sensor_signature
 from ..learning.training import evaluate, train
@@ -415,6 +416,7 @@ def obtain_table(
     if given is not None:
         table = load_any_table(given)
         check_compatible(table, env.layout, sensor_signature(env.config), given)
+        check_rule(table, env.config.learner, given, "give transfer its --config")
         return table, given, 0.0
     name = f"{source}.qtable"
     report = None if say is None else (lambda line: say(f"training: {line}"))
@@ -520,6 +522,8 @@ def preflight(cfg: TransferConfig, out: Path) -> None:
             if given is not None:
                 table = load_any_table(given)
                 check_compatible(table, env.layout, sensor_signature(env.config), given)
+                check_rule(table, env.config.learner, given, "give transfer its --config")
+        check_rule(table, env.config.learner, given, "give transfer its --config")
     check_output(out)
 
 

@@ -52,9 +52,42 @@ def algorithm_record(cfg: LearnerConfig) -> dict[str, Any] | None:
     >>> algorithm_record(LearnerConfig()) is None
     True
     """
-    if cfg.algorithm == "q":
+    rule = {"no_undo": True} if cfg.no_undo else {}  # absent when off: tables as before
+    if cfg.algorithm == "q" and not rule:
         return None
-    return {"name": cfg.algorithm} | {k: getattr(cfg, k) for k in PARAMETERS[cfg.algorithm]}
+    params = {k: getattr(cfg, k) for k in PARAMETERS[cfg.algorithm]}
+    return {"name": cfg.algorithm} | params | rule
+
+
+def table_rule(table: QTable) -> bool:
+    """Whether ``table`` was learned with the no-undo rule (``learner.no_undo``; its
+    header's ``algorithm`` record says so)."""
+    rec = table.meta.get("algorithm")
+    return isinstance(rec, dict) and rec.get("no_undo") is True
+
+
+def check_rule(table: QTable, cfg: LearnerConfig, source: str, remedy: str) -> None:
+    """Refuse to read ``table``'s greedy policy under another choice rule than the one it
+    was learned with (QTableError, one line ending in ``(remedy)``): with the no-undo rule
+    the greedy action depends on the last one, so a table learned with it and evaluated
+    without it (or back) is another policy.
+
+    >>> from koolio_pymunk.store.keyword import KeywordLayout
+    >>> rec = {"name": "q", "no_undo": True}
+    >>> t = QTable(KeywordLayout((("A", 3),)), {"algorithm": rec, "episodes": 2})
+    >>> check_rule(t, LearnerConfig(no_undo=True), "t.qtable", "")
+    >>> check_rule(t, LearnerConfig(), "t.qtable", "give its --config")
+    Traceback (most recent call last):
+    koolio_pymunk.store.errors.QTableError: t.qtable: learner.no_undo: table learned with the ...
+    """
+    theirs = table_rule(table)
+    learned = bool(table.rows) or int(table.meta.get("episodes", 0)) > 0
+    if learned and theirs != bool(cfg.no_undo):
+        if theirs:
+            what = "table learned with the no-undo rule, this run chooses among all actions"
+        else:
+            what = "table learned choosing among all actions, this run has the no-undo rule"
+        raise QTableError(located(source, "learner.no_undo", f"{what} ({remedy})"))
 
 
 def table_algorithm(table: QTable, source: str) -> str:
@@ -104,6 +137,7 @@ def check_algorithm(table: QTable, cfg: LearnerConfig, source: str, remedy: str)
                 f"table learned with {theirs}, this run uses {cfg.algorithm} ({remedy})",
             )
         )
+    check_rule(table, cfg, source, remedy)
 
 
 def adopt(table: QTable, cfg: LearnerConfig, source: str) -> None:

@@ -64,6 +64,7 @@ from ..store.kernel_cache import ensure_fresh
 from ..task.env import WRONG_DOOR, KoolioEnv
 from ..world.segment_query import wall_array
 from ..world.swept_move import sweep
+from .action_rules import UNDO
 from .fleet_kernel import (
     ACTION_EVENT,
     EVENTS,
@@ -85,8 +86,11 @@ ensure_fresh()  # numba's cache, in step with every kernel's source (see there)
 CHUNK = 4096
 #: :func:`run_steps`'s outcome codes beyond :data:`EVENTS`' indices.
 RUNNING, WRONG_DOOR_CODE, TRUNCATED_CODE = -1, len(EVENTS), len(EVENTS) + 1
-#: ``ints`` of an episode: state key, steps, bumps, has been rescued, rescued this step.
-I_STATE, I_STEPS, I_BUMPS, I_HAS_BEEN_RESCUED, I_RESCUED = range(5)
+#: ``ints`` of an episode: state key, steps, bumps, has been rescued, rescued this step,
+#: the last action (``QLearner.last``, for ``learner.no_undo``).
+I_STATE, I_STEPS, I_BUMPS, I_HAS_BEEN_RESCUED, I_RESCUED, I_LAST = range(6)
+#: ``action_rules.UNDO`` as an array the kernels read.
+_UNDO = np.array(UNDO, np.int64)
 #: ``floats`` of an episode: x, y, heading, return.
 F_X, F_Y, F_H, F_RETURN = range(4)
 _TWO_PI = 2.0 * math.pi  # physics.TWO_PI
@@ -135,26 +139,44 @@ def sense_reading(x: float, y: float, h: float, rng, sense: tuple) -> tuple[int,
 
 
 @numba.njit(cache=True)
-def _act(state: int, epsilon: float, arng, n_actions: int, index, q: np.ndarray) -> tuple:
-    """``QLearner.act``: explore with probability epsilon, else greedy, ties at random.
-    Returns the action and whether it was the exploratory choice."""
+def _any_action(arng, n_actions: int, bar: int) -> int:
+    """``QLearner._any_action``: a uniform random action, not ``bar`` (-1: none barred)."""
+    if bar < 0:
+        return arng.integers(0, n_actions)
+    k = arng.integers(0, n_actions - 1)
+    return k + 1 if k >= bar else k
+
+
+@numba.njit(cache=True)
+def _best(q: np.ndarray, i: int, n_actions: int, bar: int) -> float:
+    """The highest Q of row ``i`` over the actions but ``bar``."""
+    best = -np.inf
+    for a in range(n_actions):
+        if a != bar and q[i, a] > best:
+            best = q[i, a]
+    return best
+
+
+@numba.njit(cache=True)
+def _act(state: int, epsilon: float, arng, n_actions: int, index, q: np.ndarray,
+         bar: int = -1) -> tuple:  # fmt: skip
+    """``QLearner.act``: explore with probability epsilon, else greedy, ties at random;
+    never ``bar`` (``learner.no_undo``; -1: none barred). Returns the action and whether
+    it was the exploratory choice."""
     if epsilon > 0.0 and arng.random() < epsilon:
-        return arng.integers(0, n_actions), True
+        return _any_action(arng, n_actions, bar), True
     i = -1
     if state in index:
         i = index[state]
     if i < 0:
-        return arng.integers(0, n_actions), False
-    best = q[i, 0]
-    for a in range(1, n_actions):
-        if q[i, a] > best:
-            best = q[i, a]
+        return _any_action(arng, n_actions, bar), False
+    best = _best(q, i, n_actions, bar)
     ties = 0
     for a in range(n_actions):
-        ties += q[i, a] == best
+        ties += a != bar and q[i, a] == best
     pick = 0 if ties == 1 else arng.integers(0, ties)
     for a in range(n_actions):
-        if q[i, a] == best:
+        if a != bar and q[i, a] == best:
             if pick == 0:
                 return a, False
             pick -= 1
@@ -225,17 +247,13 @@ def _remember(key: int, action: int, out: np.ndarray, memory: tuple, mem: np.nda
 
 
 @numba.njit(cache=True)
-def _not_greedy(index, q: np.ndarray, state: int, action: int) -> bool:
-    """``QLambda.explore``'s cut: ``action`` is below the best of ``state``'s row (a
-    state never visited has no row: no cut)."""
+def _not_greedy(index, q: np.ndarray, state: int, action: int, bar: int = -1) -> bool:
+    """``QLambda.explore``'s cut: ``action`` is below the best of ``state``'s row over the
+    actions allowed (all but ``bar``; a state never visited has no row: no cut)."""
     if state not in index:
         return False
     i = index[state]
-    best = q[i, 0]
-    for a in range(1, q.shape[1]):
-        if q[i, a] > best:
-            best = q[i, a]
-    return q[i, action] < best
+    return q[i, action] < _best(q, i, q.shape[1], bar)
 
 
 @numba.njit(cache=True)
@@ -339,18 +357,18 @@ def run_steps(
     ``task`` = ``(rewards by event code, zone_arrays, auto_rescue_toggle,
     max_steps_before_rescue, rescue_chance, rescue_max_backup, step cap, misread model
     on)``; ``learner`` =
-    ``(alpha, gamma, n_actions)``; ``lam`` = ``(Q(lambda) on, gamma * lambda, trace
+    ``(alpha, gamma, n_actions, no_undo)``; ``lam`` = ``(Q(lambda) on, gamma * lambda, trace
     cutoff)`` with its ``traces`` (:func:`lambda_update`); ``memory`` (empty fields: off)
     and ``mem`` are :func:`_remember`'s; ``world`` = ``(walls, radius,
     move distance, turn arc, (motion on, drift, drift sigma, slip sigma, turn sigma))``;
     ``sense`` is built by :meth:`CompiledEpisode.sense_group`."""
     rewards, zones, auto_rescue, rescue_after, chance, max_backup, cap, misread_on = task
-    alpha, gamma, n_actions = learner
+    alpha, gamma, n_actions, no_undo = learner
     walls, radius, distance = world[0], world[1], world[2]
     discs, disc_radius, points, starts, boxes = zones
     misread = sense[5][6]
     q = table[0]
-    state = ints[I_STATE]
+    state, last = ints[I_STATE], ints[I_LAST]
     x, y, h = floats[F_X], floats[F_Y], floats[F_H]
     outcome = RUNNING
     lambda_on, t_meta = lam[0], traces[3]
@@ -358,9 +376,11 @@ def run_steps(
     for _ in range(budget):
         if lambda_on and state != t_meta[1]:  # not where the last step ended: no traces
             t_meta[0] = 0
-        action, explored = _act(state, epsilon, arng, n_actions, index, q)
-        if lambda_on and explored and _not_greedy(index, q, state, action):
+        bar = _UNDO[last] if no_undo and last >= 0 else -1
+        action, explored = _act(state, epsilon, arng, n_actions, index, q, bar)
+        if lambda_on and explored and _not_greedy(index, q, state, action, bar):
             t_meta[0] = 0  # Watkins's cut
+        last = action
         x, y, h = _move(action, x, y, h, rng, world)
         nxt, bump, close = sense_reading(x, y, h, rng, sense)
         if memory_on:
@@ -395,6 +415,7 @@ def run_steps(
                 state = _remember(state, -1, out, memory, mem)
             ints[I_RESCUED] = 1
             ints[I_HAS_BEEN_RESCUED] = 1
+            last = -1  # QLearner.relocated
         if terminated:
             outcome = WRONG_DOOR_CODE if code == 0 and misread_on and misread[0] else code
             break
@@ -402,6 +423,7 @@ def run_steps(
             outcome = TRUNCATED_CODE
             break
     ints[I_STATE] = state
+    ints[I_LAST] = last
     floats[F_X] = x
     floats[F_Y] = y
     floats[F_H] = h
@@ -436,7 +458,7 @@ class CompiledEpisode:
             float(rescue.rescue_chance),
             int(rescue.rescue_max_backup),
         )
-        self.ints = np.zeros(5, np.int64)
+        self.ints = np.zeros(6, np.int64)
         self.floats = np.zeros(4)
         self.lam = (False, 0.0, 0.0)
         if isinstance(agent, QLambda):
@@ -481,12 +503,12 @@ class CompiledEpisode:
         sh = self.table()
         x, y, h = env.world.pose(0)
         ints, floats = self.ints, self.floats
-        ints[:] = (env.state_key, env.steps, env.bumps, int(env.has_been_rescued), 0)
+        ints[:] = (env.state_key, env.steps, env.bumps, int(env.has_been_rescued), 0, agent.last)
         floats[:] = (x, y, h, env.episode_reward)
         cfg = env.config
         misread = bool(env.sensors.realism.misread)
         task = (self.rewards, self.zones, *self.rescue, int(cfg.episode.max_steps), misread)
-        learner = (float(agent.alpha), float(agent.gamma), int(agent.n_actions))
+        learner = (float(agent.alpha), float(agent.gamma), int(agent.n_actions), agent.no_undo)
         sense, world = self.sense_group(), self.world_group()
         outcome = RUNNING
         self._traces_in(sh)
@@ -580,6 +602,7 @@ class CompiledEpisode:
         """The env after the steps run: pose, state, counters, the last reading."""
         ints, floats = self.ints, self.floats
         x, y, h, total = (float(v) for v in floats)
+        self.agent.last = int(ints[I_LAST])
         self.env.adopt(
             (x, y, h),
             int(ints[I_STATE]),

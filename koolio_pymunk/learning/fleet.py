@@ -192,8 +192,8 @@ def _generators(n: int):
 
 def check_fleet(env: KoolioEnv, robots: int) -> None:
     """Refuse, in one line, what the many-robot loop does not run: realism models, a
-    memory in the state, a learner other than one-step Q (``train`` asks before it
-    prints or writes anything)."""
+    memory in the state, a learner other than one-step Q, the no-undo rule (``train``
+    asks before it prints or writes anything)."""
     cfg = env.config
     if realism_on(cfg.realism):
         raise KoolioError(
@@ -215,6 +215,15 @@ def check_fleet(env: KoolioEnv, robots: int) -> None:
                 "learner.algorithm",
                 f"{cfg.learner.algorithm} learns with one robot only: the compiled "
                 "many-robot loop (fleet_kernel) has one-step Q only (use --robots 1)",
+            )
+        )
+    if cfg.learner.no_undo:
+        raise ConfigError(
+            located(
+                f"--robots {robots}",
+                "learner.no_undo",
+                "the many-robot loop chooses among all five actions: it has no no-undo "
+                "rule yet (use --robots 1)",
             )
         )
 

@@ -42,6 +42,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..store.config import LearnerConfig
+from .action_rules import allowed
 from .qlearning import QLearner, td_step, td_target
 from .qtable import QTable
 
@@ -71,9 +72,10 @@ class QLambda(QLearner):
 
     def explore(self, state: int) -> int:
         """A uniform random action; Watkins's cut when it is not a greedy one."""
+        bar = self.bar  # before the choice: act() moves ``last`` after it
         action = super().explore(state)
         row = self.table.peek(state)
-        if row is not None and row[action] < max(row):
+        if row is not None and row[action] < max(row[a] for a in allowed(self.n_actions, bar)):
             self.traces.clear()
         return action
 

@@ -35,6 +35,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..store.config import LearnerConfig
+from .action_rules import NONE, allowed, allowed_action, barred
 from .qtable import QTable
 
 
@@ -54,29 +55,53 @@ class QLearner:
         self.gamma = cfg.gamma
         self.epsilon = cfg.epsilon.start
         self.n_actions = table.layout.n_actions
+        self.no_undo = bool(cfg.no_undo)
+        self.last = NONE
+        """The action taken last (``learner.no_undo`` bars its undo); NONE at an episode's
+        start and after a rescue."""
 
     def begin_episode(self, episode: int, rng: np.random.Generator) -> None:
         """Start ``episode`` (0-based): its generator, and epsilon from the schedule."""
         self.rng = rng
         self.epsilon = self.cfg.epsilon.at(episode)
+        self.last = NONE
+
+    def relocated(self, state: int) -> None:
+        """An auto rescue moved the robot: the next action undoes nothing."""
+        self.last = NONE
 
     def act(self, state: int) -> int:
         """A uniform random action with probability epsilon, else a greedy one."""
         if self.epsilon > 0.0 and self.rng.random() < self.epsilon:
-            return self.explore(state)
-        return self.greedy(state)
+            action = self.explore(state)
+        else:
+            action = self.greedy(state)
+        self.last = action
+        return action
+
+    @property
+    def bar(self) -> int:
+        """The action the no-undo rule bars now (-1: none)."""
+        return barred(self.last) if self.no_undo else -1
 
     def explore(self, state: int) -> int:
-        """The exploratory choice: a uniform random action."""
-        return int(self.rng.integers(self.n_actions))
+        """The exploratory choice: a uniform random action (of those allowed)."""
+        return self._any_action()
+
+    def _any_action(self) -> int:
+        bar = self.bar
+        if bar < 0:
+            return int(self.rng.integers(self.n_actions))
+        return allowed_action(int(self.rng.integers(self.n_actions - 1)), bar)
 
     def greedy(self, state: int) -> int:
-        """An action of highest Q; ties broken uniformly at random."""
+        """An action of highest Q (of those allowed); ties broken uniformly at random."""
         row = self.table.peek(state)
         if row is None:
-            return int(self.rng.integers(self.n_actions))
-        best = max(row)
-        ties = [a for a, q in enumerate(row) if q == best]
+            return self._any_action()
+        choices = allowed(self.n_actions, self.bar)
+        best = max(row[a] for a in choices)
+        ties = [a for a in choices if row[a] == best]
         if len(ties) == 1:
             return ties[0]
         return ties[int(self.rng.integers(len(ties)))]

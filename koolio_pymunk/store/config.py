@@ -309,6 +309,11 @@ class LearnerConfig:
     planning_steps: int = 10
     """``dyna``: simulated updates from the model after every real step (n in Sutton and
     Barto's Dyna-Q), 0..10,000; 0 is one-step Q that also records the model."""
+    no_undo: bool = False
+    """Never choose the action that undoes the last one (RotateRight right after
+    RotateLeft and back, Reverse right after Forward and back), greedy or exploring, in
+    training, evaluation and on the robot (:mod:`koolio_pymunk.learning.action_rules`).
+    Not in the paper: it breaks the two-step loops of aliased states."""
 
 
 @dataclass

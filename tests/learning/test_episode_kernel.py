@@ -23,6 +23,9 @@ EAGER_RESCUE = {
 #: Q(lambda) as configured by default, and with traces that live hundreds of steps.
 QLAMBDA = {"learner": {"algorithm": "qlambda"}}
 LONG_TRACES = {"learner": {"algorithm": "qlambda", "trace_decay": 1.0, "trace_cutoff": 1e-6}}
+#: The no-undo rule, with one-step Q and with Q(lambda) (its cut over the allowed actions).
+NO_UNDO = {"learner": {"no_undo": True}}
+NO_UNDO_QLAMBDA = {"learner": {"algorithm": "qlambda", "no_undo": True, "trace_decay": 0.7}}
 #: The ``paper-memory`` profile's sensors (side cameras at +-90, the goal camera and the
 #: action in the state), and every memory field with sightings forgotten after 3 steps.
 PAPER_MEMORY = {
@@ -95,6 +98,9 @@ def stop_after(calls: int):
         ("hallway", None, PAPER_BEARING),
         ("hallway", "koolio-real", BEARING_45),
         ("hallway", "koolio-real", EVERY_SENSOR_MODEL),
+        ("hallway", None, NO_UNDO),
+        ("room", "koolio-real", {**NO_UNDO_QLAMBDA, **EAGER_RESCUE}),
+        ("hallway", None, {**NO_UNDO_QLAMBDA, **PAPER_MEMORY}),
     ],
 )
 def test_compiled_episodes_match_the_python_loop(arena, world, overrides):
@@ -129,6 +135,8 @@ def test_rescues_and_truncations_happen_in_the_compared_runs():
         ("paper-memory", None, {}),
         ("paper-memory", "koolio-real", {}),  # three pings per sonar
         ("paper-memory-qlambda", None, {}),  # Q(lambda) over the goal's bearing, forgetting
+        (None, None, NO_UNDO_QLAMBDA),
+        (None, "koolio-real", NO_UNDO),
     ],
 )
 def test_train_writes_the_same_files_compiled_and_in_python(tmp_path, name, world, overrides):

@@ -59,6 +59,17 @@ def test_paper_memory_qlambda_profile_is_paper_memory_with_its_memory_and_learne
     assert lam == mem
 
 
+def test_qlambda_no_undo_profile_is_the_default_with_its_learner_only() -> None:
+    """``qlambda-no-undo`` is the default robot (sensors, rewards, everything) with
+    Q(lambda) (lambda 0.7, alpha 0.1, epsilon over 150 episodes) and the no-undo rule."""
+    fast, default = load_config("qlambda-no-undo"), load_config()
+    le = fast.learner
+    assert (le.algorithm, le.trace_decay, le.alpha, le.no_undo) == ("qlambda", 0.7, 0.1, True)
+    assert le.epsilon.decay_episodes == 150 and not default.learner.no_undo
+    fast.learner = default.learner
+    assert fast == default
+
+
 def test_unknown_profile_is_one_line_error() -> None:
     with pytest.raises(
         ConfigError, match=r"^--config: papr: no such profile \(did you mean 'paper'\?\)"

@@ -27,7 +27,7 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ...learning.algorithms import make_learner
+from ...learning.algorithms import check_rule, make_learner
 from ...learning.episodes import EVAL_STREAM, INTERRUPTED, TRAIN_STREAM, EpisodeResult, Episodes
 from ...learning.qlearning import QLearner
 from ...learning.qtable import QTable, QTableStore, check_compatible, sensor_signature
@@ -104,6 +104,7 @@ def watched_table(env: KoolioEnv, qtable: str | Path, warn: bool = True) -> QTab
     check_compatible(
         table, env.layout, sensor_signature(env.config), str(qtable), arena_record(env.arena)
     )
+    check_rule(table, env.config.learner, str(qtable), "give view the --config it was learned with")
     return table
 
 
