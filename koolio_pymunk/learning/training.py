@@ -49,7 +49,14 @@ from .episodes import (
     EpisodeResult,
     Episodes,
 )
-from .evaluation import DEFAULT_EVAL_EPISODES, Check, EvalResult, PeriodicCheck, evaluate
+from .evaluation import (
+    DEFAULT_EVAL_EPISODES,
+    Check,
+    EvalResult,
+    PeriodicCheck,
+    check_not_best,
+    evaluate,
+)
 from .qtable import (
     QTable,
     QTableStore,
@@ -246,10 +253,11 @@ class RunFiles:
         record: dict[str, str] | None = None,
     ) -> QTable | None:
         """The checks of :meth:`open` that need no lock, by reading only: the log's path
-        and header, the table (the backup when torn) made for this run's sensors, goal,
-        world (``record``: :func:`run_record`, computed when None) and learning algorithm,
-        a new table's log without rows of another run. Returns the table a run would
-        resume (None: a new one)."""
+        and header, the table (the backup when torn) not a kept best table
+        (:func:`~koolio_pymunk.learning.evaluation.check_not_best`), made for this run's
+        sensors, goal, world (``record``: :func:`run_record`, computed when None) and
+        learning algorithm, a new table's log without rows of another run. Returns the
+        table a run would resume (None: a new one)."""
         logged = log_path is not None and str(log_path) != ""
         if not store.locked:  # in use by another: that, before a line about the table
             check_lock_file(store.path)
@@ -268,6 +276,7 @@ class RunFiles:
                     )
                 )
             return None
+        check_not_best(store.path, table)
         check_compatible(table, env.layout, sensor_signature(env.config), str(store.path))
         record = run_record(env) if record is None else record
         check_record(table, record, str(store.path), arena_goal(env), table_arena_goal(table, env))
