@@ -229,7 +229,7 @@ class RunFiles:
             log = LogWriter(
                 log_path,
                 int(table.meta.get("episodes", 0)),
-                store.fresh,
+                store.fresh or store.created,  # made by this run (--init-qtable): a new log
                 store.path,
                 purpose,
                 extra_fields=tuple(env.randomizer.columns),
@@ -276,7 +276,8 @@ class RunFiles:
                     )
                 )
             return None
-        check_not_best(store.path, table)
+        if not store.created:  # a table started from a best one keeps its header until saved
+            check_not_best(store.path, table)
         check_compatible(table, env.layout, sensor_signature(env.config), str(store.path))
         record = run_record(env) if record is None else record
         check_record(table, record, str(store.path), arena_goal(env), table_arena_goal(table, env))

@@ -176,3 +176,70 @@ def test_a_read_only_file_system_is_named_as_such(tmp_path, monkeypatch):
     monkeypatch.setattr(os, "statvfs", lambda p: ReadOnly())
     with pytest.raises(FileError, match=r"new\.csv: cannot write: read-only file system \("):
         check_log_path(tmp_path / "new.csv", extra_fields=())
+
+
+# -- a torn row of an episode the table holds, a log with no rows ------------------------
+@pytest.mark.parametrize(
+    ("torn", "warning"),
+    [
+        (None, "q.csv: its last row was cut short (episode 1, a write interrupted): moved to "
+         "q.csv.removed; the Q-table q.qtable holds episode 1, whose row is lost"),
+        ("2,-5,3", "q.csv: moved 1 row (episode 2) to q.csv.removed: the Q-table q.qtable "
+         "holds 2 episodes (it was saved before them); they run again"),
+        ("1", "q.csv: moved 1 row (a torn row) to q.csv.removed: the Q-table q.qtable "
+         "holds 2 episodes (it was saved before them); they run again"),
+    ],
+    ids=["held", "ahead", "no-number"],
+)  # fmt: skip
+def test_a_torn_row_says_whether_its_episode_runs_again(work, capsys, torn, warning):
+    """Audit: ``truncate -s -5`` on the log cut the row of an episode the table holds;
+    the warning said it runs again (it does not: its row is lost). The episode number
+    before the first comma decides; a row cut before it is unknown, as before."""
+    text = (work / "q.csv").read_text(encoding="utf-8")
+    if torn is None:
+        (work / "q.csv").write_text(text[:-5], encoding="utf-8")
+        torn = text[:-5].split("\n")[-1]
+    else:
+        _append(work, torn)
+    assert cli.main(TRAIN) == 0
+    assert capsys.readouterr().err.strip().splitlines() == [f"warning: {warning}"]
+    want = ["0", "2"] if torn.startswith("1,") else ["0", "1", "2"]
+    assert [r["episode"] for r in log_rows(work / "q.csv")] == want
+    assert (work / "q.csv.removed").read_text(encoding="utf-8").split("\n")[1] == torn
+
+
+@pytest.mark.parametrize(
+    ("state", "why"),
+    [("missing", "it is missing"), ("empty", "it is empty"), ("header", "it holds no rows")],
+)
+def test_a_log_without_rows_beside_a_trained_table_warns(work, capsys, state, why):
+    """Audit: a deleted or emptied log resumed silently at the table's count, while a log
+    lacking only its last rows warned. The same warning now, one line; training goes on.
+    A table the run makes itself (``--init-qtable``) starts its new log quietly."""
+    header = (work / "q.csv").read_text(encoding="utf-8").split("\n")[0]
+    content = {"missing": None, "empty": "", "header": header + "\n"}[state]
+    if content is None:
+        (work / "q.csv").unlink()
+    else:
+        (work / "q.csv").write_text(content, encoding="utf-8")
+    assert cli.main(TRAIN) == 0
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"warning: q.csv: lacks the rows of episodes 0..1 ({why}; the Q-table q.qtable holds "
+        "2 episodes); new rows start at episode 2"
+    ]
+    assert [r["episode"] for r in log_rows(work / "q.csv")] == ["2"]
+    seeded = ["train", *ENV, "--episodes", "4", "--quiet", "--init-qtable", "q.qtable"]
+    assert cli.main([*seeded, "--qtable", "n.qtable", "--log", "n.csv"]) == 0
+    assert capsys.readouterr().err == ""
+    assert [r["episode"] for r in log_rows(work / "n.csv")] == ["3"]
+
+
+def test_a_log_lacking_its_last_row_names_it(work, capsys):
+    """The kill between a save and its row: one row missing, named as one."""
+    lines = (work / "q.csv").read_text(encoding="utf-8").split("\n")
+    (work / "q.csv").write_text("\n".join(lines[:2]) + "\n", encoding="utf-8")
+    assert cli.main(TRAIN) == 0
+    assert capsys.readouterr().err.strip().splitlines() == [
+        "warning: q.csv: lacks the row of episode 1 (the run stopped after saving the table "
+        "and before writing it)"
+    ]
