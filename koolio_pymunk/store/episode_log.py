@@ -33,13 +33,33 @@ the log and the table can disagree after a stop:
   after them) out of the log into ``<log>.removed`` (a log too, so nothing is lost), with
   a warning, before appending: episode numbers never repeat (except after an
   ``interrupted`` row, by design);
-* a new table (no table file, no backup) with a log that already holds rows is refused:
-  that log belongs to another run;
 * a torn last row (no line end: a write cut short) is moved the same way, whatever it
   holds. Its episode number, when it has one (the digits before its first comma), says
   what it was: an episode the table does not hold runs again (it is counted with the
   rows ahead, in their warning); one the table holds keeps its learning, and the warning
   says that its row is lost.
+
+**Another run's log** is refused in one line before any file is written, when it
+evidently does not belong to the table:
+
+* a new table (no table file, no backup) with a log that already holds rows;
+* a table that records a goal (``--goal`` other than the arena's active one, not
+  ``random``: :func:`~koolio_pymunk.learning.qtable.check_record` keeps it for the table's
+  whole life) and a row that names another goal;
+* a row the run would move as ahead of the table whose ``epsilon`` is no value of the
+  run's exploration schedule (``learner.epsilon``) at any episode number (one robot logs
+  the value of the episode's own number, many robots that of its start's number).
+
+Only the rows ahead are held to the schedule: they were written by the run that saved
+the table last, and resuming it with its configuration, as documented, writes the same
+values; rows the table holds may have been written under other learner parameters,
+which may change between runs (:func:`~koolio_pymunk.learning.algorithms.attach`). So a
+log of another run that is not ahead of the table (and has the same goal) is not
+detected: it is taken as the table's, with the warning that rows are missing if any
+are. The one legitimate case refused is a run resumed with another ``learner.epsilon``
+right after a stop that left rows ahead: the message names the way out (the
+configuration that wrote them, once). What a table records cannot say more without a
+change of the file formats (the seed and the schedule are not in the header).
 
 **What a row may hold.** Every line of at most :data:`MAX_LOG_LINE` characters (longer
 ones are refused before the CSV reader sees them), the header's number of columns,
@@ -65,7 +85,7 @@ import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from .errors import FileError, KoolioError, located
 from .files import (
@@ -78,6 +98,9 @@ from .files import (
     read_text,
 )
 from .locks import FileLock, check_lock_file, lock_path
+
+if TYPE_CHECKING:
+    from .config import EpsilonSchedule
 
 LOG_FIELDS = ("episode", "reward", "steps", "bumps", "outcome", "rescued", "epsilon", "goal")
 HEADER = ",".join(LOG_FIELDS)
@@ -325,12 +348,53 @@ def _row(p: Path, n: int, line: str, header: list[str]) -> dict[str, str]:
     return row
 
 
+@dataclass(frozen=True)
+class RowRules:
+    """What the rows of a table's log can hold, from the run and the table (module doc,
+    "Another run's log"); None: not checked."""
+
+    epsilon: EpsilonSchedule | None = None
+    """The run's exploration schedule: a row ahead of the table has one of its values."""
+    goal: str | None = None
+    """The goal every row names (a table that records one, other than ``random``)."""
+
+
+def schedule_gives(schedule: EpsilonSchedule, logged: str) -> bool:
+    """Does ``schedule`` give the epsilon ``logged`` (as a log writes it: 6 significant
+    digits) at some episode number >= 0? Exact for any number of decay episodes: the
+    schedule is linear, so only the episode numbers next to where its line crosses the
+    value can give it.
+
+    >>> from koolio_pymunk.store.config import EpsilonSchedule
+    >>> s = EpsilonSchedule(start=0.15, end=0.01, decay_episodes=600)
+    >>> [schedule_gives(s, v) for v in ("0.15", "0.149767", "0.01", "0.1497", "0.2")]
+    [True, True, True, False, False]
+    >>> schedule_gives(EpsilonSchedule(0.01, 0.01, 0), "0.149767")
+    False
+    """
+    value = ascii_float(logged)
+    if value is None:
+        return False
+    want = f"{value:.6g}"
+    start, end, n = schedule.start, schedule.end, schedule.decay_episodes
+    numbers = {0}
+    if n > 0:
+        numbers.add(n)  # ``end`` from then on
+        if end != start:
+            x = (value - start) * n / (end - start)
+            if math.isfinite(x) and -2 <= x <= n + 2:
+                k = math.floor(x)
+                numbers.update(j for j in range(k - 1, k + 3) if 0 <= j <= n)
+    return any(f"{schedule.at(k):.6g}" == want for k in numbers)
+
+
 class LogWriter:
     """Appends CSV rows to the log (header once), flushing every row.
 
     With ``episodes`` (the Q-table's episode count) the existing log is first brought in
-    step with the table (module doc); ``fresh`` says the table is new (made by this run).
-    The log's lock is held until :meth:`close`.
+    step with the table (module doc); ``fresh`` says the table is new (made by this run),
+    ``rules`` what its rows can hold (another run's log is refused). The log's lock is
+    held until :meth:`close`.
     """
 
     def __init__(
@@ -342,6 +406,7 @@ class LogWriter:
         purpose: str = "koolio-pm",
         warn: Callable[[str], None] | None = None,
         extra_fields: tuple[str, ...] = (),
+        rules: RowRules | None = None,
     ) -> None:
         self.path = Path(path) if path is not None and str(path) != "" else None
         self.extra_fields = tuple(extra_fields)
@@ -358,7 +423,7 @@ class LogWriter:
         self._lock = FileLock(self.path, purpose).acquire()
         try:
             if episodes is not None:
-                self._reconcile(episodes, fresh, table)
+                self._reconcile(episodes, fresh, table, rules)
         except OSError as exc:
             self.close()
             raise file_error(self.path, "write", exc) from None
@@ -367,7 +432,9 @@ class LogWriter:
             raise
 
     # -- agreement with the table -----------------------------------------------------------
-    def _reconcile(self, episodes: int, fresh: bool, table: str | Path | None) -> None:
+    def _reconcile(
+        self, episodes: int, fresh: bool, table: str | Path | None, rules: RowRules | None
+    ) -> None:
         assert self.path is not None
         p = self.path
         text = _read(p) if p.exists() else None
@@ -377,7 +444,7 @@ class LogWriter:
                 self._later.append(_lacks(p, 0, episodes, table, why))
             return
         _check_header(p, text, self.extra_fields)
-        plan = _plan(p, text, episodes, fresh, table)
+        plan = _plan(p, text, episodes, fresh, table, rules)
         if plan.header_only:  # the header without its line end
             atomic_write(p, (plan.lines[0] + "\n").encode("utf-8"))
         if plan.again or plan.torn is not None:
@@ -505,6 +572,7 @@ def _plan(
     episodes: int,
     fresh: bool,
     table: str | Path | None,
+    rules: RowRules | None,
 ) -> _Plan:
     """What bringing the log text ``text`` in step with a table of ``episodes`` episodes
     does; a one-line :class:`KoolioError` when the log is another run's (module doc).
@@ -523,8 +591,10 @@ def _plan(
                 f"{table or ''} is new: give a new --log (or move this one away)",
             )
         )
-    cut, last = _cut_line(p, lines, episodes)
+    cut, last = _cut_line(p, lines, episodes, rules, table)
     keep = len(lines) - 1 if cut is None else cut
+    if rules is not None and rules.epsilon is not None and cut is not None:
+        _check_ahead(p, lines, keep, episodes, rules.epsilon, table)
     again = lines[keep:-1]
     t = _torn_number(torn) if torn is not None else None
     lost = t if t is not None and t < episodes else None
@@ -533,21 +603,90 @@ def _plan(
     return _Plan(lines, keep, cut is not None, last, rows, torn, again, lost)
 
 
-def _cut_line(p: Path, lines: list[str], episodes: int) -> tuple[int | None, int]:
-    """Index of the first line to remove (the first finished row numbered ``episodes`` or
-    more), or None; and the last finished episode number kept (-1: none). Every row
-    before it is checked (module doc)."""
-    last = -1
+def check_in_step(
+    path: str | Path,
+    episodes: int,
+    table: str | Path | None = None,
+    rules: RowRules | None = None,
+) -> None:
+    """Refuse, reading only, the log at ``path`` that a run on a table of ``episodes``
+    episodes would refuse (another run's log: module doc); a missing or empty log
+    passes. The header and rows are checked first (:func:`check_log_path`)."""
+    p = Path(path)
+    if not p.exists() or rules is None:
+        return
+    text = _read(p)
+    if not text:
+        return
+    _check_header(p, text)
+    lines = text.split("\n")[1:-1]
+    if rules.goal is None and all((_torn_number(ln) or 0) < episodes for ln in lines):
+        return  # no row ahead (a pass without the CSV reader: a long log is read once more)
+    _plan(p, text, episodes, False, table, rules)
+
+
+def _check_ahead(
+    p: Path,
+    lines: list[str],
+    keep: int,
+    episodes: int,
+    schedule: EpsilonSchedule,
+    table: str | Path | None,
+) -> None:
+    """The complete rows ``lines[keep:-1]`` (ahead of the table) have epsilons the run's
+    ``schedule`` gives (module doc)."""
     header = csv_fields(str(p), 1, lines[0])
-    for k in range(1, len(lines) - 1):
+    for k in range(keep, len(lines) - 1):
         if not lines[k].strip():
             continue
         row = _row(p, k + 1, lines[k], header)
+        if not schedule_gives(schedule, row["epsilon"]):
+            raise KoolioError(
+                located(
+                    str(p),
+                    f"line {k + 1}",
+                    f"episode {row['episode']} has epsilon {row['epsilon']}, which this "
+                    "run's learner.epsilon never gives: a row of another run, ahead of the "
+                    f"Q-table {table or ''} ({_count(episodes)}); give another --log, or "
+                    "resume with the configuration that wrote it",
+                )
+            )
+
+
+def _cut_line(
+    p: Path,
+    lines: list[str],
+    episodes: int,
+    rules: RowRules | None = None,
+    table: str | Path | None = None,
+) -> tuple[int | None, int]:
+    """Index of the first line to remove (the first finished row numbered ``episodes`` or
+    more), or None; and the last finished episode number kept (-1: none). Every row
+    before it is checked (module doc), and with ``rules.goal`` every row names it."""
+    last = -1
+    cut = None
+    goal = rules.goal if rules is not None else None
+    header = csv_fields(str(p), 1, lines[0])
+    for k in range(1, len(lines) - 1):
+        if not lines[k].strip() or (cut is not None and goal is None):
+            continue
+        row = _row(p, k + 1, lines[k], header)
         number = int(row["episode"])
-        if row["outcome"] == "interrupted":
+        if goal is not None and row["goal"] != goal:
+            raise KoolioError(
+                located(
+                    str(p),
+                    f"line {k + 1}",
+                    f"episode {number} was logged for goal {row['goal']}, and the Q-table "
+                    f"{table or ''} is trained for goal {goal}: a row of another run; give "
+                    "another --log",
+                )
+            )
+        if cut is not None or row["outcome"] == "interrupted":
             continue
         if number >= episodes:
-            return k, last
+            cut = k
+            continue
         if number <= last:
             raise KoolioError(
                 located(
@@ -558,7 +697,7 @@ def _cut_line(p: Path, lines: list[str], episodes: int) -> tuple[int | None, int
                 )
             )
         last = number
-    return None, last
+    return cut, last
 
 
 def _torn_number(line: str) -> int | None:
