@@ -172,6 +172,39 @@ def best_path(table: str | Path) -> Path:
     return p.with_name(stem + ".best.qtable")
 
 
+def is_best_table(path: str | Path, table: QTable) -> bool:
+    """Is ``table``, read from ``path``, a kept best table: named as :func:`best_path`
+    names one (``*.best.qtable``) and recording its check (``best`` in its header)? Both:
+    a table started from a best one (``--init-qtable``) keeps the record until its first
+    save, under its own name; a table merely named so has no record.
+
+    >>> from koolio_pymunk.store.keyword import KeywordLayout
+    >>> t = QTable(KeywordLayout((("A", 3),)), {"best": {"episode": 40}})
+    >>> is_best_table("runs/t.best.qtable", t), is_best_table("runs/new.qtable", t)
+    (True, False)
+    """
+    return Path(path).name.endswith(".best.qtable") and isinstance(table.meta.get("best"), dict)
+
+
+def check_not_best(path: str | Path, table: QTable) -> None:
+    """Refuse to train a kept best table in place (``train --qtable X.best.qtable``, ``view
+    --learn``): its next save would rotate the best table into its backup and train it
+    away. One line naming the way: a new table started from it. Reading a best table
+    (``eval``, ``export``, ``view --greedy``, ``transfer``, ``--init-qtable``) is fine."""
+    if not is_best_table(path, table):
+        return
+    episode = table.meta["best"].get("episode", "?")
+    raise KoolioError(
+        located(
+            str(path),
+            "",
+            f"the best table kept by train --eval-every (its check at episode {episode}): "
+            "training it would change it in place; start a new table from it: "
+            f"koolio-pm train --init-qtable {path} --qtable NEW.qtable",
+        )
+    )
+
+
 def evals_path(log: str | Path | None, table: str | Path) -> Path:
     """The evaluations file of a run: beside its log (``X.csv`` -> ``X.evals.csv``), or
     beside its table when it has no log.

@@ -378,6 +378,9 @@ class QTableStore:
         self._lock = FileLock(self.path, purpose)
         self.fresh = False
         """True when :meth:`load` found no table (a new one starts at episode 0)."""
+        self.created = False
+        """True once :meth:`create` wrote a new table: the run made it (a new table, or one
+        started from another with ``--init-qtable``), so its log must be new too."""
 
     def open(
         self,
@@ -464,6 +467,7 @@ class QTableStore:
         self._written = identity(written)
         self._keep_backup()
         self.fresh = False
+        self.created = True
 
     def save(self, table: QTable) -> None:
         """Write ``table``: the previous good table becomes the backup once the new one is

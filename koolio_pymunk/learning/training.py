@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..store.episode_log import LOG_FIELDS as LOG_FIELDS  # the log's columns, re-exported
-from ..store.episode_log import LogWriter, check_log_path, log_rows
+from ..store.episode_log import LogWriter, RowRules, check_in_step, check_log_path, log_rows
 from ..store.errors import KoolioError, located
 from ..store.interrupts import SafeInterrupt
 from ..store.locks import check_lock_file
@@ -49,7 +49,14 @@ from .episodes import (
     EpisodeResult,
     Episodes,
 )
-from .evaluation import DEFAULT_EVAL_EPISODES, Check, EvalResult, PeriodicCheck, evaluate
+from .evaluation import (
+    DEFAULT_EVAL_EPISODES,
+    Check,
+    EvalResult,
+    PeriodicCheck,
+    check_not_best,
+    evaluate,
+)
 from .qtable import (
     QTable,
     QTableStore,
@@ -128,6 +135,16 @@ def run_record(env: KoolioEnv) -> dict[str, str]:
     if world != "ideal":
         out["world"] = world
     return out
+
+
+def log_rules(env: KoolioEnv, table: QTable) -> RowRules:
+    """What the rows of ``table``'s log can hold in a run in ``env``
+    (:mod:`koolio_pymunk.store.episode_log`, "Another run's log"): rows ahead of the table
+    an epsilon of the run's schedule, every row the goal the table records (other than
+    ``random``: a table keeps its goal for life, :func:`check_record`)."""
+    goal = table.meta.get("goal")
+    fixed = goal if isinstance(goal, str) and goal != "random" else None
+    return RowRules(epsilon=env.config.learner.epsilon, goal=fixed)
 
 
 def arena_goal(env: KoolioEnv) -> str:
@@ -222,10 +239,11 @@ class RunFiles:
             log = LogWriter(
                 log_path,
                 int(table.meta.get("episodes", 0)),
-                store.fresh,
+                store.fresh or store.created,  # made by this run (--init-qtable): a new log
                 store.path,
                 purpose,
                 extra_fields=tuple(env.randomizer.columns),
+                rules=log_rules(env, table),
             )
             try:
                 if store.fresh:
@@ -246,10 +264,12 @@ class RunFiles:
         record: dict[str, str] | None = None,
     ) -> QTable | None:
         """The checks of :meth:`open` that need no lock, by reading only: the log's path
-        and header, the table (the backup when torn) made for this run's sensors, goal,
-        world (``record``: :func:`run_record`, computed when None) and learning algorithm,
-        a new table's log without rows of another run. Returns the table a run would
-        resume (None: a new one)."""
+        and header, the table (the backup when torn) not a kept best table
+        (:func:`~koolio_pymunk.learning.evaluation.check_not_best`), made for this run's
+        sensors, goal, world (``record``: :func:`run_record`, computed when None) and
+        learning algorithm, a log that is not another run's (a new table's without rows;
+        :class:`~koolio_pymunk.store.episode_log.RowRules` otherwise). Returns the table a
+        run would resume (None: a new one)."""
         logged = log_path is not None and str(log_path) != ""
         if not store.locked:  # in use by another: that, before a line about the table
             check_lock_file(store.path)
@@ -268,10 +288,15 @@ class RunFiles:
                     )
                 )
             return None
+        if not store.created:  # a table started from a best one keeps its header until saved
+            check_not_best(store.path, table)
         check_compatible(table, env.layout, sensor_signature(env.config), str(store.path))
         record = run_record(env) if record is None else record
         check_record(table, record, str(store.path), arena_goal(env), table_arena_goal(table, env))
         attach(table, env.config.learner, str(store.path))  # the same algorithm
+        if logged and not store.created:  # a table this run made has a new log (checked)
+            episodes = int(table.meta.get("episodes", 0))
+            check_in_step(log_path, episodes, store.path, log_rules(env, table))
         return table
 
     def finished(self, res: EpisodeResult, save: bool = False) -> None:

@@ -21,17 +21,45 @@ the log's lock (:mod:`koolio_pymunk.store.locks`).
 the log and the table can disagree after a stop:
 
 * a row is missing when the process was killed between the two writes (at most one row,
-  or the rows of one save with ``--robots N``); resuming warns and goes on;
-* rows are ahead when the table holds fewer episodes than the log: ``--robots N`` saves
-  every N episodes, and a torn table falls back to its backup. Those episodes' learning
-  is not in the table and their numbers will be run again, so resuming **moves** those
-  rows (and the interrupted rows after them) out of the log into ``<log>.removed`` (a log
-  too, so nothing is lost), with a warning, before appending: episode numbers never
-  repeat (except after an ``interrupted`` row, by design);
-* a new table (no table file, no backup) with a log that already holds rows is refused:
-  that log belongs to another run.
+  or the rows of one save with ``--robots N``); resuming warns and goes on. A log that
+  is missing, empty or only its header beside a table of N > 0 episodes lacks the rows
+  of episodes 0..N-1: the same warning (not for a table the run made itself: a new one,
+  or one started with ``--init-qtable``, whose log starts at its count). These warnings
+  come with the first new row: a run that fails before it says only its error;
+* rows are ahead when the table holds fewer episodes than the log: ``--save-every K``,
+  ``--save-seconds T`` and ``--robots N`` save less often than they log, and a torn table
+  falls back to its backup. Those episodes' learning is not in the table and their
+  numbers will be run again, so resuming **moves** those rows (and the interrupted rows
+  after them) out of the log into ``<log>.removed`` (a log too, so nothing is lost), with
+  a warning, before appending: episode numbers never repeat (except after an
+  ``interrupted`` row, by design);
+* a torn last row (no line end: a write cut short) is moved the same way, whatever it
+  holds. Its episode number, when it has one (the digits before its first comma), says
+  what it was: an episode the table does not hold runs again (it is counted with the
+  rows ahead, in their warning); one the table holds keeps its learning, and the warning
+  says that its row is lost.
 
-A torn last row (no line end) is moved the same way, whatever it holds.
+**Another run's log** is refused in one line before any file is written, when it
+evidently does not belong to the table:
+
+* a new table (no table file, no backup) with a log that already holds rows;
+* a table that records a goal (``--goal`` other than the arena's active one, not
+  ``random``: :func:`~koolio_pymunk.learning.qtable.check_record` keeps it for the table's
+  whole life) and a row that names another goal;
+* a row the run would move as ahead of the table whose ``epsilon`` is no value of the
+  run's exploration schedule (``learner.epsilon``) at any episode number (one robot logs
+  the value of the episode's own number, many robots that of its start's number).
+
+Only the rows ahead are held to the schedule: they were written by the run that saved
+the table last, and resuming it with its configuration, as documented, writes the same
+values; rows the table holds may have been written under other learner parameters,
+which may change between runs (:func:`~koolio_pymunk.learning.algorithms.attach`). So a
+log of another run that is not ahead of the table (and has the same goal) is not
+detected: it is taken as the table's, with the warning that rows are missing if any
+are. The one legitimate case refused is a run resumed with another ``learner.epsilon``
+right after a stop that left rows ahead: the message names the way out (the
+configuration that wrote them, once). What a table records cannot say more without a
+change of the file formats (the seed and the schedule are not in the header).
 
 **What a row may hold.** Every line of at most :data:`MAX_LOG_LINE` characters (longer
 ones are refused before the CSV reader sees them), the header's number of columns,
@@ -39,7 +67,7 @@ ones are refused before the CSV reader sees them), the header's number of column
 ``epsilon`` and the ``realism.*`` draws finite decimal numbers in ASCII (:func:`ascii_int`,
 :func:`ascii_float`: Python's ``int`` and ``float`` would take ``²``, ``١٢``, ``1_0``,
 `` 7`` or ``nan``), ``rescued`` 0 or 1. A complete row that breaks a rule is refused with
-one line naming it; a torn last row is moved to ``<log>.removed``; readers
+one line naming it; a torn last row is moved to ``<log>.removed`` (above); readers
 (:func:`log_rows`, ``koolio-pm plot``) leave a torn last row out (it may be a row being
 written).
 """
@@ -55,8 +83,9 @@ import re
 import stat
 import sys
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from .errors import FileError, KoolioError, located
 from .files import (
@@ -69,6 +98,9 @@ from .files import (
     read_text,
 )
 from .locks import FileLock, check_lock_file, lock_path
+
+if TYPE_CHECKING:
+    from .config import EpsilonSchedule
 
 LOG_FIELDS = ("episode", "reward", "steps", "bumps", "outcome", "rescued", "epsilon", "goal")
 HEADER = ",".join(LOG_FIELDS)
@@ -316,11 +348,52 @@ def _row(p: Path, n: int, line: str, header: list[str]) -> dict[str, str]:
     return row
 
 
+@dataclass(frozen=True)
+class RowRules:
+    """What the rows of a table's log can hold, from the run and the table (module doc,
+    "Another run's log"); None: not checked."""
+
+    epsilon: EpsilonSchedule | None = None
+    """The run's exploration schedule: a row ahead of the table has one of its values."""
+    goal: str | None = None
+    """The goal every row names (a table that records one, other than ``random``)."""
+
+
+def schedule_gives(schedule: EpsilonSchedule, logged: str) -> bool:
+    """Does ``schedule`` give the epsilon ``logged`` (as a log writes it: 6 significant
+    digits) at some episode number >= 0? Exact for any number of decay episodes: the
+    schedule is linear, so only the episode numbers next to where its line crosses the
+    value can give it.
+
+    >>> from koolio_pymunk.store.config import EpsilonSchedule
+    >>> s = EpsilonSchedule(start=0.15, end=0.01, decay_episodes=600)
+    >>> [schedule_gives(s, v) for v in ("0.15", "0.149767", "0.01", "0.1497", "0.2")]
+    [True, True, True, False, False]
+    >>> schedule_gives(EpsilonSchedule(0.01, 0.01, 0), "0.149767")
+    False
+    """
+    value = ascii_float(logged)
+    if value is None:
+        return False
+    want = f"{value:.6g}"
+    start, end, n = schedule.start, schedule.end, schedule.decay_episodes
+    numbers = {0}
+    if n > 0:
+        numbers.add(n)  # ``end`` from then on
+        if end != start:
+            x = (value - start) * n / (end - start)
+            if math.isfinite(x) and -2 <= x <= n + 2:
+                k = math.floor(x)
+                numbers.update(j for j in range(k - 1, k + 3) if 0 <= j <= n)
+    return any(f"{schedule.at(k):.6g}" == want for k in numbers)
+
+
 class LogWriter:
     """Appends CSV rows to the log (header once), flushing every row.
 
     With ``episodes`` (the Q-table's episode count) the existing log is first brought in
-    step with the table (module doc); ``fresh`` says the table is new. The log's lock is
+    step with the table (module doc); ``fresh`` says the table is new (made by this run),
+    ``rules`` what its rows can hold (another run's log is refused). The log's lock is
     held until :meth:`close`.
     """
 
@@ -333,6 +406,7 @@ class LogWriter:
         purpose: str = "koolio-pm",
         warn: Callable[[str], None] | None = None,
         extra_fields: tuple[str, ...] = (),
+        rules: RowRules | None = None,
     ) -> None:
         self.path = Path(path) if path is not None and str(path) != "" else None
         self.extra_fields = tuple(extra_fields)
@@ -340,13 +414,16 @@ class LogWriter:
         self._fh: io.TextIOBase | None = None
         self._warn = warn or (lambda msg: print(f"warning: {msg}", file=sys.stderr))
         self._lock: FileLock | None = None
+        self._later: list[str] = []
+        """Warnings of missing rows, given with the first new row: they change no file, and
+        a run that fails before it (at its first save) says only its error."""
         if self.path is None:
             return
         check_log_path(self.path, table, self.extra_fields)
         self._lock = FileLock(self.path, purpose).acquire()
         try:
-            if episodes is not None and self.path.exists():
-                self._reconcile(episodes, fresh, table)
+            if episodes is not None:
+                self._reconcile(episodes, fresh, table, rules)
         except OSError as exc:
             self.close()
             raise file_error(self.path, "write", exc) from None
@@ -355,53 +432,48 @@ class LogWriter:
             raise
 
     # -- agreement with the table -----------------------------------------------------------
-    def _reconcile(self, episodes: int, fresh: bool, table: str | Path | None) -> None:
+    def _reconcile(
+        self, episodes: int, fresh: bool, table: str | Path | None, rules: RowRules | None
+    ) -> None:
         assert self.path is not None
         p = self.path
-        text = _read(p)
+        text = _read(p) if p.exists() else None
         if not text:
+            if not fresh and episodes > 0:
+                why = "it is missing" if text is None else "it is empty"
+                self._later.append(_lacks(p, 0, episodes, table, why))
             return
         _check_header(p, text, self.extra_fields)
-        lines = text.split("\n")
-        if len(lines) == 1:  # the header without its line end
-            atomic_write(p, (lines[0] + "\n").encode("utf-8"))
-            return
-        torn = lines[-1] != ""  # the last row has no line end: a write was cut short
-        rows = [ln for ln in lines[1:-1] if ln.strip()]
-        if fresh and (rows or torn):
-            raise KoolioError(
-                located(
-                    str(p),
-                    "",
-                    f"holds {len(rows)} rows of another run, and the Q-table "
-                    f"{table or ''} is new: give a new --log (or move this one away)",
-                )
-            )
-        cut, last = _cut_line(p, lines, episodes)
-        if cut is None and not torn:
-            if rows and last < episodes - 1:
+        plan = _plan(p, text, episodes, fresh, table, rules)
+        if plan.header_only:  # the header without its line end
+            atomic_write(p, (plan.lines[0] + "\n").encode("utf-8"))
+        if plan.again or plan.torn is not None:
+            kept = removed_path(p)
+            removed = plan.lines[plan.keep : -1] + ([plan.torn] if plan.torn is not None else [])
+            _append_rows(kept, plan.lines[0], removed)  # first: a crash between loses nothing
+            atomic_write(p, ("\n".join(plan.lines[: plan.keep]) + "\n").encode("utf-8"))
+            if plan.again:
+                self._warn(_moved(p, plan.again, kept, table, episodes))
+            if plan.lost is not None:
+                t = plan.lost
+                whose = ", whose row is lost" if t > plan.last else ""
                 self._warn(
-                    f"{p}: lacks the rows of episodes {last + 1}..{episodes - 1} (the run "
-                    "stopped after saving the table and before writing them)"
+                    f"{p}: its last row was cut short (episode {t}, a write interrupted): "
+                    f"moved to {kept}; the Q-table {table or ''} holds episode {t}{whose}"
                 )
+        if plan.cut or fresh:  # rows ahead: none is missing; a new table: none yet
             return
-        keep = len(lines) - 1 if cut is None else cut
-        removed = lines[keep:-1] + ([lines[-1]] if torn else [])
-        numbers = _numbers(removed)
-        kept = removed_path(p)
-        _append_rows(kept, lines[0], removed)  # first: a crash between the two writes loses nothing
-        atomic_write(p, ("\n".join(lines[:keep]) + "\n").encode("utf-8"))
-        if not numbers:
-            span = "a torn row"
-        elif numbers[0] == numbers[-1]:
-            span = f"episode {numbers[0]}"
-        else:
-            span = f"episodes {numbers[0]}..{numbers[-1]}"
-        rows = "1 row" if len(removed) == 1 else f"{len(removed)} rows"
-        self._warn(
-            f"{p}: moved {rows} ({span}) to {kept}: the Q-table {table or ''} holds "
-            f"{episodes} episodes (it was saved before them); they run again"
-        )
+        first = plan.last + 1
+        if plan.lost is not None and plan.lost == first:
+            first += 1  # said above
+        if first < episodes:
+            them = "it" if first == episodes - 1 else "them"
+            why = (
+                f"the run stopped after saving the table and before writing {them}"
+                if plan.rows
+                else "it holds no rows"
+            )
+            self._later.append(_lacks(p, first, episodes, table, why))
 
     # -- writing -------------------------------------------------------------------------
     def _open(self) -> io.TextIOBase:
@@ -421,6 +493,9 @@ class LogWriter:
         """Append ``result.row()`` (an :class:`~koolio_pymunk.learning.training.EpisodeResult`)."""
         if self.path is None:
             return
+        for message in self._later:
+            self._warn(message)
+        self._later = []
         buf = io.StringIO()
         csv.writer(buf, lineterminator="\n").writerow(result.row())
         try:
@@ -466,21 +541,152 @@ def _append_rows(path: Path, header: str, lines: list[str]) -> None:
     atomic_write(path, (old + "".join(ln + "\n" for ln in lines)).encode("utf-8"))
 
 
-def _cut_line(p: Path, lines: list[str], episodes: int) -> tuple[int | None, int]:
-    """Index of the first line to remove (the first finished row numbered ``episodes`` or
-    more), or None; and the last finished episode number kept (-1: none). Every row
-    before it is checked (module doc)."""
-    last = -1
+@dataclass
+class _Plan:
+    """How a log is brought in step with a table of ``episodes`` episodes (module doc)."""
+
+    lines: list[str]
+    """The log's text split at line ends (the last item: after the last one)."""
+    keep: int
+    """``lines[:keep]`` stay in the log (the header included)."""
+    cut: bool
+    """Complete rows are ahead of the table (``lines[keep:-1]`` move)."""
+    last: int
+    """The last finished episode kept (-1: none)."""
+    rows: int
+    """Complete rows of the log."""
+    torn: str | None
+    """The torn last line (no line end), moved too; None: none."""
+    again: list[str]
+    """The lines moved whose episodes run again (with the torn line when its episode is
+    not the table's, or unknown)."""
+    lost: int | None
+    """The torn line's episode when the table holds it (its row is lost)."""
+    header_only: bool = False
+    """The log is its header without a line end."""
+
+
+def _plan(
+    p: Path,
+    text: str,
+    episodes: int,
+    fresh: bool,
+    table: str | Path | None,
+    rules: RowRules | None,
+) -> _Plan:
+    """What bringing the log text ``text`` in step with a table of ``episodes`` episodes
+    does; a one-line :class:`KoolioError` when the log is another run's (module doc).
+    Reads only."""
+    lines = text.split("\n")
+    if len(lines) == 1:  # the header without its line end
+        return _Plan([lines[0], ""], 1, False, -1, 0, None, [], None, header_only=True)
+    torn = lines[-1] if lines[-1] != "" else None
+    rows = sum(1 for ln in lines[1:-1] if ln.strip())
+    if fresh and (rows or torn is not None):
+        raise KoolioError(
+            located(
+                str(p),
+                "",
+                f"holds {rows} rows of another run, and the Q-table "
+                f"{table or ''} is new: give a new --log (or move this one away)",
+            )
+        )
+    cut, last = _cut_line(p, lines, episodes, rules, table)
+    keep = len(lines) - 1 if cut is None else cut
+    if rules is not None and rules.epsilon is not None and cut is not None:
+        _check_ahead(p, lines, keep, episodes, rules.epsilon, table)
+    again = lines[keep:-1]
+    t = _torn_number(torn) if torn is not None else None
+    lost = t if t is not None and t < episodes else None
+    if torn is not None and lost is None:
+        again.append(torn)
+    return _Plan(lines, keep, cut is not None, last, rows, torn, again, lost)
+
+
+def check_in_step(
+    path: str | Path,
+    episodes: int,
+    table: str | Path | None = None,
+    rules: RowRules | None = None,
+) -> None:
+    """Refuse, reading only, the log at ``path`` that a run on a table of ``episodes``
+    episodes would refuse (another run's log: module doc); a missing or empty log
+    passes. The header and rows are checked first (:func:`check_log_path`)."""
+    p = Path(path)
+    if not p.exists() or rules is None:
+        return
+    text = _read(p)
+    if not text:
+        return
+    _check_header(p, text)
+    lines = text.split("\n")[1:-1]
+    if rules.goal is None and all((_torn_number(ln) or 0) < episodes for ln in lines):
+        return  # no row ahead (a pass without the CSV reader: a long log is read once more)
+    _plan(p, text, episodes, False, table, rules)
+
+
+def _check_ahead(
+    p: Path,
+    lines: list[str],
+    keep: int,
+    episodes: int,
+    schedule: EpsilonSchedule,
+    table: str | Path | None,
+) -> None:
+    """The complete rows ``lines[keep:-1]`` (ahead of the table) have epsilons the run's
+    ``schedule`` gives (module doc)."""
     header = csv_fields(str(p), 1, lines[0])
-    for k in range(1, len(lines) - 1):
+    for k in range(keep, len(lines) - 1):
         if not lines[k].strip():
             continue
         row = _row(p, k + 1, lines[k], header)
+        if not schedule_gives(schedule, row["epsilon"]):
+            raise KoolioError(
+                located(
+                    str(p),
+                    f"line {k + 1}",
+                    f"episode {row['episode']} has epsilon {row['epsilon']}, which this "
+                    "run's learner.epsilon never gives: a row of another run, ahead of the "
+                    f"Q-table {table or ''} ({_count(episodes)}); give another --log, or "
+                    "resume with the configuration that wrote it",
+                )
+            )
+
+
+def _cut_line(
+    p: Path,
+    lines: list[str],
+    episodes: int,
+    rules: RowRules | None = None,
+    table: str | Path | None = None,
+) -> tuple[int | None, int]:
+    """Index of the first line to remove (the first finished row numbered ``episodes`` or
+    more), or None; and the last finished episode number kept (-1: none). Every row
+    before it is checked (module doc), and with ``rules.goal`` every row names it."""
+    last = -1
+    cut = None
+    goal = rules.goal if rules is not None else None
+    header = csv_fields(str(p), 1, lines[0])
+    for k in range(1, len(lines) - 1):
+        if not lines[k].strip() or (cut is not None and goal is None):
+            continue
+        row = _row(p, k + 1, lines[k], header)
         number = int(row["episode"])
-        if row["outcome"] == "interrupted":
+        if goal is not None and row["goal"] != goal:
+            raise KoolioError(
+                located(
+                    str(p),
+                    f"line {k + 1}",
+                    f"episode {number} was logged for goal {row['goal']}, and the Q-table "
+                    f"{table or ''} is trained for goal {goal}: a row of another run; give "
+                    "another --log",
+                )
+            )
+        if cut is not None or row["outcome"] == "interrupted":
             continue
         if number >= episodes:
-            return k, last
+            cut = k
+            continue
         if number <= last:
             raise KoolioError(
                 located(
@@ -491,14 +697,54 @@ def _cut_line(p: Path, lines: list[str], episodes: int) -> tuple[int | None, int
                 )
             )
         last = number
-    return None, last
+    return cut, last
+
+
+def _torn_number(line: str) -> int | None:
+    """The episode number of a row, torn or not: its digits before its first comma (None
+    when the row was cut before that comma, or does not start with a number)."""
+    head, comma, _ = line[:20].partition(",")
+    return ascii_int(head) if comma else None
+
+
+def _span(numbers: list[int]) -> str:
+    """``episode 4``, ``episodes 4..5``, or ``a torn row`` (no number)."""
+    if not numbers:
+        return "a torn row"
+    if numbers[0] == numbers[-1]:
+        return f"episode {numbers[0]}"
+    return f"episodes {numbers[0]}..{numbers[-1]}"
+
+
+def _moved(p: Path, lines: list[str], kept: Path, table: str | Path | None, episodes: int) -> str:
+    """The warning of rows moved out of the log ``p`` whose episodes run again."""
+    rows = "1 row" if len(lines) == 1 else f"{len(lines)} rows"
+    return (
+        f"{p}: moved {rows} ({_span(_numbers(lines))}) to {kept}: the Q-table {table or ''} "
+        f"holds {_count(episodes)} (it was saved before them); they run again"
+    )
+
+
+def _lacks(p: Path, first: int, episodes: int, table: str | Path | None, why: str) -> str:
+    """The warning of a log lacking the rows of episodes ``first``..``episodes - 1``."""
+    if first == episodes - 1:
+        which = f"the row of episode {first}"
+    else:
+        which = f"the rows of episodes {first}..{episodes - 1}"
+    if first == 0:
+        return (
+            f"{p}: lacks {which} ({why}; the Q-table {table or ''} holds "
+            f"{_count(episodes)}); new rows start at episode {episodes}"
+        )
+    return f"{p}: lacks {which} ({why})"
+
+
+def _count(episodes: int) -> str:
+    """``1 episode``, ``6 episodes``."""
+    return f"{episodes} episode" + ("" if episodes == 1 else "s")
 
 
 def _numbers(lines: list[str]) -> list[int]:
-    """Episode numbers of the rows ``lines`` (a torn or malformed row has none)."""
-    out = []
-    for ln in lines:
-        number = ascii_int(ln[:20].split(",", 1)[0])
-        if number is not None:
-            out.append(number)
-    return sorted(out)
+    """Episode numbers of the rows ``lines`` (:func:`_torn_number`: a row cut before its
+    first comma, or malformed, has none)."""
+    return sorted(n for n in map(_torn_number, lines) if n is not None)

@@ -13,6 +13,7 @@ import time
 from pathlib import Path
 
 import pytest
+from inputs import expect_error
 
 from koolio_pymunk.apps.cli import main
 from koolio_pymunk.learning import evaluation
@@ -295,6 +296,40 @@ def test_training_on_from_a_best_table_drops_its_record(tmp_path) -> None:
     run(tmp_path, "b", 1, checks=False)
     table = load_qtable(tmp_path / "b.qtable")
     assert table.meta["episodes"] == 3 and "best" not in table.meta
+
+
+def test_training_a_best_table_in_place_is_refused(tmp_path, capsys, monkeypatch) -> None:
+    """Audit: ``train --qtable X.best.qtable`` trained the kept best table in place (its
+    backup rotated: the best snapshot lost) and started ``X.best.csv``. Refused in one
+    line naming the way, by train (one robot or many) and view --learn alike; a new table
+    started from it trains, and so does a table merely named like one (no record)."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("SDL_VIDEODRIVER", "dummy")
+    (tmp_path / "c.yaml").write_text("episode: {max_steps: 40}\n")
+    env = ["--arena", "room", "--config", "c.yaml"]
+    assert main(["train", *env, "--episodes", "4", "--eval-every", "2", "--eval-episodes", "2",
+                 "--qtable", "t.qtable", "--quiet"]) == 0  # fmt: skip
+    episode = load_qtable(tmp_path / "t.best.qtable").meta["best"]["episode"]
+    assert episode in (2, 4)
+    line = (
+        f"koolio-pm: error: t.best.qtable: the best table kept by train --eval-every (its "
+        f"check at episode {episode}): training it would change it in place; start a new "
+        "table from it: koolio-pm train --init-qtable t.best.qtable --qtable NEW.qtable"
+    )
+    best = ["--qtable", "t.best.qtable"]
+    for argv in (
+        ["train", *env, *best, "--episodes", "6"],
+        ["train", *env, *best, "--episodes", "6", "--robots", "2"],
+        ["view", *env, *best, "--learn", "--steps", "2"],
+    ):
+        assert expect_error(capsys, tmp_path, argv) == line
+    assert not (tmp_path / "t.best.csv").exists()
+    more = str(episode + 1)
+    assert main(["train", *env, "--init-qtable", "t.best.qtable", "--qtable", "n.qtable",
+                 "--episodes", more, "--quiet"]) == 0  # fmt: skip
+    assert load_qtable(tmp_path / "n.qtable").meta["episodes"] == episode + 1
+    (tmp_path / "u.best.qtable").write_bytes((tmp_path / "t.qtable").read_bytes())
+    assert main(["train", *env, "--qtable", "u.best.qtable", "--episodes", "5", "--quiet"]) == 0
 
 
 def test_file_names() -> None:

@@ -12,7 +12,15 @@ import pytest
 from inputs import expect_error
 
 from koolio_pymunk.apps import cli
-from koolio_pymunk.store.episode_log import LogWriter, ascii_float, ascii_int, log_rows
+from koolio_pymunk.store.config import EpsilonSchedule
+from koolio_pymunk.store.episode_log import (
+    LogWriter,
+    RowRules,
+    ascii_float,
+    ascii_int,
+    log_rows,
+    schedule_gives,
+)
 from koolio_pymunk.store.errors import KoolioError
 
 ENV = ["--arena", "room", "--config", "tiny.yaml"]
@@ -176,3 +184,142 @@ def test_a_read_only_file_system_is_named_as_such(tmp_path, monkeypatch):
     monkeypatch.setattr(os, "statvfs", lambda p: ReadOnly())
     with pytest.raises(FileError, match=r"new\.csv: cannot write: read-only file system \("):
         check_log_path(tmp_path / "new.csv", extra_fields=())
+
+
+# -- another run's log, a torn row of an episode the table holds, a log with no rows --------
+OTHER = "episode: {max_steps: 30}\nlearner: {epsilon: {start: 0.01, decay_episodes: 0}}\n"
+
+
+def test_the_log_of_another_table_ahead_of_it_is_refused(work, capsys):
+    """Audit: ``--log`` naming another table's log, ahead of this table: its rows moved
+    aside as if this table's, the rest appended after them (two runs in one log). Their
+    epsilons are no value of this run's schedule: refused, nothing written."""
+    (work / "m.yaml").write_text(OTHER)
+    mine = ["train", "--arena", "room", "--config", "m.yaml", "--quiet", "--qtable", "m.qtable"]
+    assert cli.main([*mine, "--episodes", "1"]) == 0  # m.qtable: 1 episode, log m.csv
+    capsys.readouterr()
+    line = expect_error(capsys, work, [*mine, "--log", "q.csv", "--episodes", "3"])
+    assert line == (
+        "koolio-pm: error: q.csv: line 3: episode 1 has epsilon 0.149767, which this run's "
+        "learner.epsilon never gives: a row of another run, ahead of the Q-table m.qtable "
+        "(1 episode); give another --log, or resume with the configuration that wrote it"
+    )
+    # the same table's own log ahead of it (a stop between two saves) moves as before
+    shutil.copy(work / "m.qtable", work / "m1.qtable")
+    assert cli.main([*mine, "--episodes", "3"]) == 0
+    shutil.copy(work / "m1.qtable", work / "m.qtable")
+    assert cli.main([*mine, "--episodes", "4"]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [
+        "warning: m.csv: moved 2 rows (episodes 1..2) to m.csv.removed: the Q-table m.qtable "
+        "holds 1 episode (it was saved before them); they run again"
+    ]
+    assert [r["episode"] for r in log_rows(work / "m.csv")] == ["0", "1", "2", "3"]
+
+
+def _writer(episodes: int, rules: RowRules) -> list[str]:
+    """Bring q.csv (in the working folder) in step with a table of ``episodes`` episodes
+    under ``rules``; the warnings."""
+    said: list[str] = []
+    LogWriter("q.csv", episodes, table="q.qtable", warn=said.append, rules=rules).close()
+    return said
+
+
+def test_rows_ahead_take_any_value_of_the_schedule(work):
+    """Many robots log an episode with the epsilon of its start's number, not its own:
+    a row ahead passes with any value the schedule gives (here episode 2 with episode
+    1's), and fails with one it never gives (half way between two episodes' values)."""
+    schedule = EpsilonSchedule(start=0.15, end=0.01, decay_episodes=600)
+    _append(work, "2,-5,30,0,truncated,0,0.149767,201\n3,-5,30,0,truncated,0,0.01,201\n")
+    text = (work / "q.csv").read_text(encoding="utf-8")
+    mid = "3,-5,30,0,truncated,0,0.14965,201\n"
+    _append(work, mid)
+    with pytest.raises(KoolioError, match=r"^q\.csv: line 6: episode 3 has epsilon 0\.14965,"):
+        _writer(2, RowRules(epsilon=schedule))
+    (work / "q.csv").write_text(text, encoding="utf-8")
+    assert _writer(2, RowRules(epsilon=schedule)) == [
+        "q.csv: moved 2 rows (episodes 2..3) to q.csv.removed: the Q-table q.qtable holds "
+        "2 episodes (it was saved before them); they run again"
+    ]
+    assert schedule_gives(EpsilonSchedule(0.3, 0.0, 10**9), "0.299999")  # 1e-10 a step
+    assert not schedule_gives(EpsilonSchedule(0.3, 0.0, 10**9), "0.31")
+
+
+def test_a_table_with_a_goal_refuses_rows_of_another_goal(work):
+    """A table that records a goal keeps it for life (check_record): every row of its
+    log names it, kept rows too."""
+    before = (work / "q.csv").read_text(encoding="utf-8")
+    with pytest.raises(KoolioError) as info:
+        _writer(2, RowRules(goal="302"))
+    assert str(info.value) == (
+        "q.csv: line 2: episode 0 was logged for goal 201, and the Q-table q.qtable is "
+        "trained for goal 302: a row of another run; give another --log"
+    )
+    assert (work / "q.csv").read_text(encoding="utf-8") == before
+    assert _writer(2, RowRules(goal="201")) == []
+
+
+@pytest.mark.parametrize(
+    ("torn", "warning"),
+    [
+        (None, "q.csv: its last row was cut short (episode 1, a write interrupted): moved to "
+         "q.csv.removed; the Q-table q.qtable holds episode 1, whose row is lost"),
+        ("2,-5,3", "q.csv: moved 1 row (episode 2) to q.csv.removed: the Q-table q.qtable "
+         "holds 2 episodes (it was saved before them); they run again"),
+        ("1", "q.csv: moved 1 row (a torn row) to q.csv.removed: the Q-table q.qtable "
+         "holds 2 episodes (it was saved before them); they run again"),
+    ],
+    ids=["held", "ahead", "no-number"],
+)  # fmt: skip
+def test_a_torn_row_says_whether_its_episode_runs_again(work, capsys, torn, warning):
+    """Audit: ``truncate -s -5`` on the log cut the row of an episode the table holds;
+    the warning said it runs again (it does not: its row is lost). The episode number
+    before the first comma decides; a row cut before it is unknown, as before."""
+    text = (work / "q.csv").read_text(encoding="utf-8")
+    if torn is None:
+        (work / "q.csv").write_text(text[:-5], encoding="utf-8")
+        torn = text[:-5].split("\n")[-1]
+    else:
+        _append(work, torn)
+    assert cli.main(TRAIN) == 0
+    assert capsys.readouterr().err.strip().splitlines() == [f"warning: {warning}"]
+    want = ["0", "2"] if torn.startswith("1,") else ["0", "1", "2"]
+    assert [r["episode"] for r in log_rows(work / "q.csv")] == want
+    assert (work / "q.csv.removed").read_text(encoding="utf-8").split("\n")[1] == torn
+
+
+@pytest.mark.parametrize(
+    ("state", "why"),
+    [("missing", "it is missing"), ("empty", "it is empty"), ("header", "it holds no rows")],
+)
+def test_a_log_without_rows_beside_a_trained_table_warns(work, capsys, state, why):
+    """Audit: a deleted or emptied log resumed silently at the table's count, while a log
+    lacking only its last rows warned. The same warning now, one line; training goes on.
+    A table the run makes itself (``--init-qtable``) starts its new log quietly."""
+    header = (work / "q.csv").read_text(encoding="utf-8").split("\n")[0]
+    content = {"missing": None, "empty": "", "header": header + "\n"}[state]
+    if content is None:
+        (work / "q.csv").unlink()
+    else:
+        (work / "q.csv").write_text(content, encoding="utf-8")
+    assert cli.main(TRAIN) == 0
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"warning: q.csv: lacks the rows of episodes 0..1 ({why}; the Q-table q.qtable holds "
+        "2 episodes); new rows start at episode 2"
+    ]
+    assert [r["episode"] for r in log_rows(work / "q.csv")] == ["2"]
+    seeded = ["train", *ENV, "--episodes", "4", "--quiet", "--init-qtable", "q.qtable"]
+    assert cli.main([*seeded, "--qtable", "n.qtable", "--log", "n.csv"]) == 0
+    assert capsys.readouterr().err == ""
+    assert [r["episode"] for r in log_rows(work / "n.csv")] == ["3"]
+
+
+def test_a_log_lacking_its_last_row_names_it(work, capsys):
+    """The kill between a save and its row: one row missing, named as one."""
+    lines = (work / "q.csv").read_text(encoding="utf-8").split("\n")
+    (work / "q.csv").write_text("\n".join(lines[:2]) + "\n", encoding="utf-8")
+    assert cli.main(TRAIN) == 0
+    assert capsys.readouterr().err.strip().splitlines() == [
+        "warning: q.csv: lacks the row of episode 1 (the run stopped after saving the table "
+        "and before writing it)"
+    ]
