@@ -523,7 +523,6 @@ def preflight(cfg: TransferConfig, out: Path) -> None:
                 table = load_any_table(given)
                 check_compatible(table, env.layout, sensor_signature(env.config), given)
                 check_rule(table, env.config.learner, given, "give transfer its --config")
-        check_rule(table, env.config.learner, given, "give transfer its --config")
     check_output(out)
 
 

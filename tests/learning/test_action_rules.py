@@ -196,3 +196,20 @@ def test_a_table_is_read_only_under_the_rule_it_was_learned_with(tmp_path, capsy
     assert '"no_undo": true' in out.read_text()
     assert main(["eval", "--arena", "room", "--config", str(cfg), "--qtable", str(out),
                  "--episodes", "1"]) == 0  # fmt: skip
+
+
+def test_transfer_refuses_a_table_of_the_other_rule(tmp_path, capsys) -> None:
+    from koolio_pymunk.apps.cli import main
+
+    cfg = tmp_path / "n.yaml"
+    cfg.write_text("episode: {max_steps: 40}\nlearner: {no_undo: true}\n")
+    t = tmp_path / "t.qtable"
+    argv = ["train", "--episodes", "2", "--config", str(cfg), "--qtable", str(t), "--quiet"]
+    assert main(argv) == 0
+    capsys.readouterr()
+    out = tmp_path / "out"
+    argv = ["transfer", "--qtable", str(t), "--dr-qtable", str(t), "--out", str(out)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert f"{t}: learner.no_undo: table learned with the no-undo rule" in err
+    assert err.count("\n") == 1 and not out.exists()
