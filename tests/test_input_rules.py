@@ -96,6 +96,8 @@ def test_bounds_that_keep_a_run_finite(item: str) -> None:
 
     def at(value: int) -> dict:
         inner: dict = {key: value}
+        if key == "forget_after":  # forgets a sighting only where one is remembered
+            inner["goal_camera"] = True
         for part in reversed(sub):
             inner = {part: inner}
         return {section: inner}

@@ -138,6 +138,6 @@ def test_learning_targets_refuses_a_bad_setting_in_one_line(tmp_path: Path) -> N
     assert p.returncode == 2, p.stderr
     assert p.stdout == ""
     assert p.stderr == (
-        "learning_targets: error: <defaults>: learner.lambda: unknown key (valid: algorithm, "
-        "alpha, gamma, epsilon, q_init, trace_decay, trace_cutoff, planning_steps)\n"
+        "learning_targets: error: <defaults>: learner.lambda: unknown key (did you mean "
+        "'trace_decay'?)\n"
     )

@@ -10,7 +10,8 @@ Three targets (each a multi-seed measurement; nothing here is timed):
   falls below 85 %, for every seed.
 * ``default``: the default profile, episodes to competence (>= 90 % of a 100-episode greedy
   evaluation, checked every ``--every`` = K episodes, 25 by default) for seeds 0-2, for
-  the algorithm measured and for one-step Q; the target is 3x fewer episodes.
+  the configuration measured (the default profile with ``--set``, or ``--config``) and
+  for the default profile itself (one-step Q); the target is 3x fewer episodes.
 * ``random``: ``train --goal random`` for ``--random-episodes`` (20,000) episodes with a
   greedy check of ``--random-check-episodes`` (200) random-door episodes every
   ``--random-every`` (1,000), then ``eval --goal all --episodes 100 --seed 7`` of the last
@@ -28,6 +29,7 @@ the goal rates of the kept best table and of the last table on a fresh evaluatio
 ``--fresh-episodes`` episodes with seed ``1,000,000 + seed`` (starts no check used).
 
     nice .venv/bin/python tools/learning_targets.py default --set learner.algorithm=qlambda
+    nice .venv/bin/python tools/learning_targets.py default --config qlambda-no-undo  # met
     nice .venv/bin/python tools/learning_targets.py paper --set learner.algorithm=dyna
     nice .venv/bin/python tools/learning_targets.py paper --config paper-memory-qlambda  # met
     nice .venv/bin/python tools/learning_targets.py random --workers 2 --out random.json

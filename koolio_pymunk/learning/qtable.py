@@ -379,8 +379,9 @@ class QTableStore:
         self.fresh = False
         """True when :meth:`load` found no table (a new one starts at episode 0)."""
         self.created = False
-        """True once :meth:`create` wrote a new table: the run made it (a new table, or one
-        started from another with ``--init-qtable``), so its log must be new too."""
+        """True from :meth:`create` (a new table, or one started from another with
+        ``--init-qtable``) to :meth:`close`: the run holding the lock made it, so its log
+        must be new too."""
 
     def open(
         self,
@@ -493,8 +494,10 @@ class QTableStore:
             atomic_write(self.backup, self._last)
 
     def close(self) -> None:
-        """Release the lock (the files stay as last saved)."""
+        """Release the lock (the files stay as last saved). The session that created the
+        table ends here: opened again, it is a table to resume like any other."""
         self._lock.release()
+        self.created = False
 
     def __enter__(self) -> QTableStore:
         return self

@@ -323,3 +323,25 @@ def test_a_log_lacking_its_last_row_names_it(work, capsys):
         "warning: q.csv: lacks the row of episode 1 (the run stopped after saving the table "
         "and before writing it)"
     ]
+
+
+def test_a_store_trained_in_chunks_resumes_its_own_log(tmp_path) -> None:
+    """``train`` called again with the same store object (a sweep's or the targets
+    tool's chunks between checks): the table the first call created is resumed with its
+    log, quietly, and the files equal one uninterrupted run's."""
+    from koolio_pymunk.learning.qtable import QTableStore
+    from koolio_pymunk.learning.training import train
+    from koolio_pymunk.store.config import load_config
+    from koolio_pymunk.task.env import KoolioEnv
+
+    warnings: list[str] = []
+    files = {}
+    for name, chunks in (("one", [6]), ("chunks", [2, 2, 2])):
+        env = KoolioEnv("room", config=load_config(overrides={"episode": {"max_steps": 40}}))
+        store = QTableStore(tmp_path / f"{name}.qtable", warn=warnings.append)
+        done = 0
+        for n in chunks:
+            train(env, store, n, 1, tmp_path / f"{name}.csv", report=None)
+            done += n
+        files[name] = [(tmp_path / f"{name}{s}").read_bytes() for s in (".qtable", ".csv")]
+    assert files["chunks"] == files["one"] and warnings == []
