@@ -64,7 +64,7 @@ from ..store.kernel_cache import ensure_fresh
 from ..task.env import WRONG_DOOR, KoolioEnv
 from ..world.segment_query import wall_array
 from ..world.swept_move import sweep
-from .action_rules import UNDO
+from .action_rules import allowed_action, barred
 from .fleet_kernel import (
     ACTION_EVENT,
     EVENTS,
@@ -89,8 +89,9 @@ RUNNING, WRONG_DOOR_CODE, TRUNCATED_CODE = -1, len(EVENTS), len(EVENTS) + 1
 #: ``ints`` of an episode: state key, steps, bumps, has been rescued, rescued this step,
 #: the last action (``QLearner.last``, for ``learner.no_undo``).
 I_STATE, I_STEPS, I_BUMPS, I_HAS_BEEN_RESCUED, I_RESCUED, I_LAST = range(6)
-#: ``action_rules.UNDO`` as an array the kernels read.
-_UNDO = np.array(UNDO, np.int64)
+#: ``action_rules.barred`` and ``allowed_action``, compiled from the same Python code.
+_barred = numba.njit(cache=True)(barred)
+_allowed_action = numba.njit(cache=True)(allowed_action)
 #: ``floats`` of an episode: x, y, heading, return.
 F_X, F_Y, F_H, F_RETURN = range(4)
 _TWO_PI = 2.0 * math.pi  # physics.TWO_PI
@@ -143,8 +144,7 @@ def _any_action(arng, n_actions: int, bar: int) -> int:
     """``QLearner._any_action``: a uniform random action, not ``bar`` (-1: none barred)."""
     if bar < 0:
         return arng.integers(0, n_actions)
-    k = arng.integers(0, n_actions - 1)
-    return k + 1 if k >= bar else k
+    return _allowed_action(arng.integers(0, n_actions - 1), bar)
 
 
 @numba.njit(cache=True)
@@ -376,7 +376,7 @@ def run_steps(
     for _ in range(budget):
         if lambda_on and state != t_meta[1]:  # not where the last step ended: no traces
             t_meta[0] = 0
-        bar = _UNDO[last] if no_undo and last >= 0 else -1
+        bar = _barred(last) if no_undo else -1
         action, explored = _act(state, epsilon, arng, n_actions, index, q, bar)
         if lambda_on and explored and _not_greedy(index, q, state, action, bar):
             t_meta[0] = 0  # Watkins's cut
