@@ -234,8 +234,9 @@ def _interrupt_after(monkeypatch, target, name: str, calls: int) -> None:
 
 @pytest.mark.parametrize("discard", [False, True])
 def test_ctrl_c_with_robots_keeps_every_finished_episode(work, capsys, monkeypatch, discard):
-    from koolio_pymunk.learning import fleet
     from koolio_pymunk.learning.fleet import _Run
+
+    from koolio_pymunk.learning import fleet
 
     ticks = _Run._ticks
     monkeypatch.setattr(fleet, "CHUNK", 1)  # one tick per compiled call
@@ -260,13 +261,13 @@ def test_discard_takes_back_only_the_unfinished_writes():
     """The journal: a robot's writes are taken back newest first, unless another robot
     wrote over them since; rows only the discarded episodes created are dropped."""
     import numpy as np
-
     from koolio_pymunk.learning.fleet_kernel import (
         SharedTable,
         new_journal,
         undo_writes,
         update_logged,
     )
+
     from koolio_pymunk.learning.qtable import QTable
     from koolio_pymunk.store.keyword import KeywordLayout
 

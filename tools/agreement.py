@@ -21,9 +21,11 @@ skips the sensors.
 
 ``--episodes N`` also trains ``N`` seeded episodes of the hallway in each world
 (``--worlds``) with each learner (``--algorithms``: one-step Q and Q(lambda), those that
-run compiled) twice, the Python episode loop and the compiled episode
-(``koolio_pymunk.learning.episode_agreement``), and counts the episodes after which the
-log row, the pose, the state or the Q-table differ in any bit (exit 1 if any).
+run compiled) and each robot count (``--robots``: 1 and 8) twice, on the Python loop
+(the reference: ``koolio_pymunk.learning.episodes.Robots``) and on the compiled step
+engine (:func:`compare_robots`), and counts the episodes after which the log row, any
+robot's pose, state, memory, generators or learner, or the Q-table differ in any bit
+(exit 1 if any).
 
     .venv/bin/python tools/agreement.py --poses 100000 --out agreement.json
     .venv/bin/python tools/agreement.py --poses 0 --moves 100000
@@ -78,36 +80,140 @@ def run_moves(moves: int, seed: int = 0, jobs: int = 2, generated: int = 4) -> l
         return [f.result() for f in futures]
 
 
-def one_episodes(world: str, episodes: int, seed: int, algorithm: str = "q") -> dict:
-    from koolio_pymunk.learning.episode_agreement import compare_episodes
+def _side(arena: str, world: str | None, overrides: dict, seed: int, robots: int, compiled: bool):
+    """One side of :func:`compare_robots`: an env, a table, the robots' learners, the loop."""
+    from koolio_pymunk.learning.algorithms import make_learner
+    from koolio_pymunk.learning.episodes import robots as make_robots
+    from koolio_pymunk.learning.qtable import QTable
+    from koolio_pymunk.store.config import load_config
+    from koolio_pymunk.task.env import KoolioEnv
 
+    env = KoolioEnv(arena, config=load_config(overrides=overrides, world=world))
+    table = QTable(env.layout, {}, env.config.learner.q_init)
+    agents = [make_learner(table, env.config.learner, None) for _ in range(robots)]
+    loop = make_robots(env, agents, seed, compiled=compiled)
+    if compiled and loop.python_reason is not None:
+        raise ValueError(f"this configuration does not run compiled: {loop.python_reason}")
+    return table, loop
+
+
+def _snapshot(loop) -> list:
+    """What must be the same on both sides after an episode: every robot's pose, state,
+    memory, generators' states and learner (its last action, its traces)."""
+    loop.sync()
+    out = []
+    for env, agent in zip(loop.envs, loop.agents):
+        out.append(
+            (
+                env.world.pose(0),
+                env.state_key,
+                env.codes,
+                (env.steps, env.bumps, env.episode_reward, env.has_been_rescued),
+                env.np_random.bit_generator.state,
+                agent.rng.bit_generator.state,
+                agent.last,
+                getattr(agent, "traces", None),
+            )
+        )
+    return out
+
+
+def compare_robots(
+    arena: str = "hallway",
+    world: str | None = None,
+    episodes: int = 10,
+    seed: int = 0,
+    robots: int = 1,
+    overrides: dict | None = None,
+    max_steps: int | None = None,
+) -> dict:
+    """Train ``episodes`` seeded episodes of ``robots`` robots in ``arena`` (in ``world``,
+    ``overrides`` laid over the configuration, ``max_steps`` the step cap) twice, on the
+    Python loop (:class:`koolio_pymunk.learning.episodes.Robots`, the reference) and on the
+    compiled step engine, and compare after every finished episode its log row, the whole
+    Q-table and every robot's pose, state, counters, memory, generators and learner, bit
+    for bit. Returns the figures (``mismatches``: episodes after which anything differed).
+
+    >>> r = compare_robots("room", episodes=3, robots=2, max_steps=40)
+    >>> r["episodes"], r["mismatches"], r["steps"] > 0
+    (3, 0, True)
+    """
+    over = dict(overrides or {})
+    if max_steps is not None:
+        over["episode"] = {**over.get("episode", {}), "max_steps": max_steps}
+    t = time.perf_counter()
+    sides = [_side(arena, world, over, seed, robots, compiled) for compiled in (False, True)]
+    started = [0, 0]
+    for (_, loop), k in zip(sides, range(2)):
+        for r in range(min(robots, episodes)):
+            loop.begin(r, started[k])
+            started[k] += 1
+    steps = mismatches = 0
+    first = -1
+    for e in range(episodes):
+        rows, snaps = [], []
+        for k, (table, loop) in enumerate(sides):
+            r = loop.advance()
+            rows.append((r, loop.result(r, episode=e).row()))
+            snaps.append((_snapshot(loop), dict(table.rows)))
+            if started[k] < episodes:
+                loop.begin(r, started[k])
+                started[k] += 1
+            else:
+                loop.release(r)
+        steps += int(rows[0][1][2])
+        if rows[0] != rows[1] or snaps[0] != snaps[1]:
+            mismatches += 1
+            first = e if first < 0 else first
+    return {
+        "arena": arena,
+        "world": world or IDEAL,
+        "robots": robots,
+        "episodes": episodes,
+        "steps": steps,
+        "mismatches": mismatches,
+        "first_mismatch": first,
+        "states": len(sides[1][0].rows),
+        "seconds": round(time.perf_counter() - t, 1),
+    }
+
+
+def one_episodes(world: str, episodes: int, seed: int, algorithm: str = "q", robots: int = 1):
     laid = None if world == IDEAL else world
     over = {"learner": {"algorithm": algorithm}}
-    out = compare_episodes("hallway", laid, episodes, seed, overrides=over).as_dict()
+    out = compare_robots("hallway", laid, episodes, seed, robots, overrides=over)
     return {"algorithm": algorithm, **out}
 
 
 def run_episodes(
-    episodes: int, seed: int, jobs: int, worlds: tuple[str, ...], algorithms: tuple[str, ...]
+    episodes: int,
+    seed: int,
+    jobs: int,
+    worlds: tuple[str, ...],
+    algorithms: tuple[str, ...],
+    robots: tuple[int, ...] = (1,),
 ) -> list[dict]:
-    """Compiled-episode agreement figures per world and algorithm (a list of dicts)."""
+    """Step-engine agreement figures per world, algorithm and robot count (dicts)."""
     with ProcessPoolExecutor(max_workers=jobs) as pool:
         futures = [
-            pool.submit(one_episodes, w, episodes, seed, a) for a in algorithms for w in worlds
+            pool.submit(one_episodes, w, episodes, seed, a, n)
+            for n in robots
+            for a in algorithms
+            for w in worlds
         ]
         return [f.result() for f in futures]
 
 
 def print_episodes(rows: list[dict]) -> None:
-    print("compiled episode vs the Python episode loop (rows, poses, tables, bit for bit):")
+    print("step engine vs the Python loop (rows, robots, tables, bit for bit):")
     print(
-        f"{'algorithm':>9} {'world':>12} {'episodes':>9} {'steps':>10} {'mismatches':>11} "
-        f"{'states':>7} {'s':>6}"
+        f"{'algorithm':>9} {'world':>12} {'robots':>6} {'episodes':>9} {'steps':>10} "
+        f"{'mismatches':>11} {'states':>7} {'s':>6}"
     )
     for r in rows:
         print(
-            f"{r['algorithm']:>9} {r['world']:>12} {r['episodes']:>9} {r['steps']:>10} "
-            f"{r['mismatches']:>11} {r['states']:>7} {r['seconds']:>6}"
+            f"{r['algorithm']:>9} {r['world']:>12} {r['robots']:>6} {r['episodes']:>9} "
+            f"{r['steps']:>10} {r['mismatches']:>11} {r['states']:>7} {r['seconds']:>6}"
         )
 
 
@@ -183,6 +289,13 @@ def main(argv: list[str] | None = None) -> int:
         default=["q", "qlambda"],
         help="learner.algorithm of the --episodes runs (q qlambda: those that run compiled)",
     )
+    p.add_argument(
+        "--robots",
+        nargs="+",
+        type=int,
+        default=[1, 8],
+        help="robot counts of the --episodes runs (1 8)",
+    )
     p.add_argument("--out", default=None, help="write the figures as JSON here")
     args = p.parse_args(argv)
     rows, moves, episodes = [], [], []
@@ -194,7 +307,12 @@ def main(argv: list[str] | None = None) -> int:
         print_moves(moves)
     if args.episodes:
         episodes = run_episodes(
-            args.episodes, args.seed, args.jobs, tuple(args.worlds), tuple(args.algorithms)
+            args.episodes,
+            args.seed,
+            args.jobs,
+            tuple(args.worlds),
+            tuple(args.algorithms),
+            tuple(args.robots),
         )
         print_episodes(episodes)
     if args.out:

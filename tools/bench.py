@@ -215,6 +215,7 @@ def irsim_row(steps: int, e2e: dict, folder: Path) -> dict | None:
 
 def many(robots: int, episodes: int, folder: Path) -> dict:
     from koolio_pymunk.learning.fleet import train_many
+
     from koolio_pymunk.learning.qtable import QTableStore
 
     env = make_env("fast")
@@ -310,11 +311,11 @@ def step_costs(poses: int, step_us: float, repeats: int = 3, world: str | None =
     judge, rescue check, the loop and Python between episodes."""
     import numba
     import numpy as np
+    from koolio_pymunk.learning.episode_kernel import CompiledEpisode, _act, _move, sense_reading
+    from koolio_pymunk.learning.fleet_kernel import SharedTable, update
 
     from koolio_pymunk.learning.algorithms import make_learner
-    from koolio_pymunk.learning.episode_kernel import CompiledEpisode, _act, _move, sense_reading
     from koolio_pymunk.learning.episodes import Episodes
-    from koolio_pymunk.learning.fleet_kernel import SharedTable, update
     from koolio_pymunk.learning.qtable import QTable
 
     @numba.njit
@@ -429,8 +430,9 @@ def competence(
     seed: int, check_every: int, max_episodes: int, eval_episodes: int, folder: Path
 ) -> dict:
     """Default training until 90 % of greedy evaluation episodes reach the goal."""
+    from koolio_pymunk.learning.evaluation import evaluate
     from koolio_pymunk.learning.qtable import QTableStore, human_bytes
-    from koolio_pymunk.learning.training import evaluate, train
+    from koolio_pymunk.learning.training import train
     from koolio_pymunk.task.env import KoolioEnv
 
     env = KoolioEnv("hallway")

@@ -33,7 +33,7 @@ from .flags import seed_type as seed_type
 DEFAULT_QTABLE = "runs/hallway.qtable"
 DEFAULT_LOG = "runs/hallway.csv"
 DEFAULT_EPISODES = 1500
-#: Most robots of ``train --robots`` (each is a copy of the arena in one pymunk space).
+#: Most robots of ``train --robots`` (each runs in its own copy of the arena).
 MAX_ROBOTS = 1024
 
 
@@ -409,10 +409,8 @@ def cmd_train(args: argparse.Namespace) -> int:
     store = QTableStore(args.qtable, purpose="koolio-pm train")
     # Everything that reading can check comes first: an error is the only line printed,
     # and no file (not even a lock file) is left behind.
-    if args.robots > 1:
-        from ..learning.fleet import check_fleet
-
-        check_fleet(env, args.robots)
+    if args.robots > 1 and args.discard_unfinished:
+        check_discard(env, args.robots)
     if args.init_qtable:
         start = _check_init_table(args.init_qtable, store, args.log, env)
     else:
@@ -430,34 +428,21 @@ def cmd_train(args: argparse.Namespace) -> int:
     if not args.quiet:
         announce_compile(env, robots=args.robots, training=True)
     report = None if args.quiet else (lambda line: print(label_progress(line)))
-    if args.robots > 1:
-        from ..learning.fleet import train_many
-
-        result = train_many(
-            env,
-            store,
-            more,
-            args.seed,
-            args.log,
-            robots=args.robots,
-            discard_unfinished=args.discard_unfinished,
-            report=report,
-            save_every=args.save_every,
-            save_seconds=args.save_seconds,
-        )
-    else:
-        result = train(
-            env,
-            store,
-            more,
-            args.seed,
-            args.log,
-            discard_unfinished=args.discard_unfinished,
-            report=report,
-            **checks,
-            save_every=args.save_every or 1,
-            save_seconds=args.save_seconds,
-        )
+    result = train(
+        env,
+        store,
+        more,
+        args.seed,
+        args.log,
+        discard_unfinished=args.discard_unfinished,
+        report=report,
+        **checks,
+        save_every=args.save_every,
+        save_seconds=args.save_seconds,
+        robots=args.robots,
+    )
+    if args.verbose and result.python_reason is not None:
+        say(f"stepped in the Python loop: {result.python_reason}")
     rate = result.goals / max(1, result.episodes_run)
     say(
         f"done: {count(result.episodes_run, 'episode')} ({result.goals} at the goal: training goal "
@@ -575,14 +560,24 @@ def _eval_every_args(args: argparse.Namespace) -> dict[str, int]:
         if args.eval_episodes is not None:
             raise KoolioError("--eval-episodes: only with --eval-every N")
         return {}
-    if args.robots > 1:
-        raise KoolioError(
-            "--eval-every: not with --robots N (the many-robot loop has no point between "
-            "episodes to check at); train one robot, or check tables with koolio-pm eval"
-        )
     if args.eval_episodes is None:
         args.eval_episodes = DEFAULT_EVAL_EPISODES
     return {"eval_every": args.eval_every, "eval_episodes": args.eval_episodes}
+
+
+def check_discard(env, robots: int) -> None:
+    """``--discard-unfinished`` with several robots takes back the unfinished episodes'
+    writes from the compiled engine's journal: refused, in one line, for a run that steps
+    in Python (Dyna-Q, the pymunk reference backend)."""
+    from ..learning.engine import why_not_config
+
+    reason = why_not_config(env)
+    if reason is not None:
+        raise KoolioError(
+            f"--discard-unfinished: with --robots {robots} it takes back the unfinished "
+            f"episodes' writes from the compiled engine's journal, and this run steps in "
+            f"Python ({reason})"
+        )
 
 
 def _check_init_table(init_path: str, store, log: str, env):
@@ -635,8 +630,8 @@ def _seed_table(init_path: str, store, log: str, env) -> None:
 
 def cmd_eval(args: argparse.Namespace) -> int:
     from ..learning.algorithms import check_rule
+    from ..learning.evaluation import evaluate
     from ..learning.qtable import check_compatible, sensor_signature
-    from ..learning.training import evaluate
     from ..world.arena import arena_record
 
     _positive(args.episodes, "--episodes")
@@ -760,7 +755,7 @@ def warn_table(table, source: str, env, policy: bool = False, verb: str = "score
     it was trained in another world than the one it is scored in (a transfer: its figure
     is not its training's; unknown for a ``policy`` file)."""
     from ..learning.qtable import describe_world
-    from ..learning.training import world_label
+    from ..store.worlds import world_label
 
     if int(table.meta.get("episodes", 0)) == 0:
         print(
@@ -893,8 +888,8 @@ def _cached(dispatcher) -> bool:
 def kernels_to_compile(env, robots: int = 1, training: bool = False) -> bool:
     """True when a run in ``env`` will compile numba kernels first (a cold cache: the
     first run after installing or changing them): the entry points of the sensing a run
-    uses (and, ``training`` one robot, the compiled episode's when it runs), looked up in
-    numba's cache index without compiling anything."""
+    uses and of the step engine when it runs the configuration, looked up in numba's
+    cache index without compiling anything."""
     sensors = env.sensors
     if not getattr(sensors, "fused", False):  # the pymunk reference: nothing compiled
         return False
@@ -906,14 +901,10 @@ def kernels_to_compile(env, robots: int = 1, training: bool = False) -> bool:
         from ..sensing import encoding_kernel, ray_kernel
 
         entries = [ray_kernel.sense_one, encoding_kernel.readout]
-    if robots > 1:
-        from ..learning import fleet_tick
+    from ..learning import engine
 
-        entries.append(fleet_tick.run_ticks)
-    elif training and env.config.learner.algorithm == "q" and not env.memory.on:
-        from ..learning import episode_kernel
-
-        entries.append(episode_kernel.run_steps)
+    if engine.why_not_config(env) is None:
+        entries.append(engine.run)
     return not all(_cached(f) for f in entries)
 
 

@@ -546,8 +546,9 @@ def run_one(task: dict[str, Any]) -> dict[str, Any]:
     Returns ``{"row": result row, "files": {name: bytes}}``; the driver writes the
     files. Depends only on the task (never on the process or node).
     """
+    from ..learning.evaluation import evaluate
     from ..learning.qtable import QTableStore
-    from ..learning.training import evaluate, train
+    from ..learning.training import train
     from ..store.config import config_from_dict
     from ..store.files import read_bytes
     from ..store.worlds import world_name

@@ -68,8 +68,9 @@ import numpy as np
 from .. import robot_runtime as rt
 from ..learning.algorithms import check_rule
 from ..learning.episodes import EVAL_STREAM, ROBOT_STREAM, Episodes
+from ..learning.evaluation import evaluate
 from ..learning.qtable import QTable, QTableStore, check_compatible, sensor_signature
-from ..learning.training import evaluate, train
+from ..learning.training import train
 from ..store.config import Config, apply_world
 from ..store.errors import KoolioError, QTableError
 from ..store.files import atomic_write, atomic_write_text

@@ -133,16 +133,15 @@ class Agent(Protocol):
 
 
 class Episodes:
-    """The episodes of one robot in ``env``, driven by ``agent`` (module doc).
+    """The episodes of one robot in ``env``, driven by ``agent`` (module doc): the
+    reference of every loop that runs episodes.
 
     ``learn`` False only watches (no :meth:`Agent.observe`); ``epsilon``, when given,
     replaces the schedule's value at every episode start (0: the greedy policy).
-    ``compiled`` True runs :meth:`run`'s steps in one compiled call
-    (:mod:`koolio_pymunk.learning.episode_kernel`) when the agent and the env allow it,
-    the same steps bit for bit; :attr:`compiled_reason` says why not otherwise.
     :meth:`begin` starts an episode, :meth:`step` makes one step and returns the outcome
     when the episode ended (``None`` while it runs), :meth:`run` steps to the end,
-    :meth:`result` is the episode's log row.
+    :meth:`result` is the episode's log row. (:func:`robots` runs many episodes of one
+    robot or several on the compiled step engine, the same steps bit for bit.)
     """
 
     def __init__(
@@ -153,7 +152,6 @@ class Episodes:
         stream: int = TRAIN_STREAM,
         learn: bool = True,
         epsilon: float | None = None,
-        compiled: bool = False,
     ) -> None:
         self.env = env
         self.agent = agent
@@ -165,16 +163,6 @@ class Episodes:
         """The number of the episode begun last (-1: none yet)."""
         self.outcome: str | None = None
         """How the current episode ended (``None`` while it runs)."""
-        self.compiled: Any = None
-        """The compiled steps (:class:`~.episode_kernel.CompiledEpisode`), or None."""
-        self.compiled_reason: str | None = "not asked for"
-        """Why :meth:`run` steps in Python (None: it runs compiled)."""
-        if compiled:
-            from .episode_kernel import CompiledEpisode, why_not
-
-            self.compiled_reason = why_not(env, agent, learn)
-            if self.compiled_reason is None:
-                self.compiled = CompiledEpisode(env, agent)  # type: ignore[arg-type]
 
     def begin(self, episode: int, options: dict[str, Any] | None = None) -> None:
         """Start ``episode``: its seeds, the env's reset, the agent's episode start."""
@@ -207,12 +195,7 @@ class Episodes:
     def run(self, stop: Callable[[], bool | None] | None = None) -> EpisodeResult:
         """Step to the end of the episode; ``stop`` is called after every step that did
         not end it, and a true result ends it as ``interrupted`` (it may also raise, as
-        :meth:`~koolio_pymunk.store.interrupts.SafeInterrupt.check` does). Compiled, ``stop``
-        is called between chunks of steps (:data:`~.episode_kernel.CHUNK`)."""
-        if self.compiled is not None:
-            outcome = self.compiled.run(stop)
-            self.outcome = INTERRUPTED if outcome is None else outcome
-            return self.result()
+        :meth:`~koolio_pymunk.store.interrupts.SafeInterrupt.check` does)."""
         step = self.step
         while step() is None:
             if stop is not None and stop():
@@ -235,3 +218,124 @@ class Episodes:
             env.goal_name,
             realism_values(env),
         )
+
+
+class Robots:
+    """N robots' episodes stepped in tick order into one table, in Python: the reference
+    of the compiled step engine (:class:`~koolio_pymunk.learning.engine.Engine`, the same
+    interface and the same episodes bit for bit).
+
+    Robot ``r`` has its env ``envs[r]`` and its learner ``agents[r]`` (the learners share
+    one Q-table). A *tick* steps every running robot once, in index order, each a whole
+    :meth:`Episodes.step` (act, simulate, learn, rescue): robot ``r`` sees the table as
+    the robots before it left it in that tick. :meth:`begin` starts robot ``r``'s episode
+    number ``episode`` (its seeds are ``(seed, episode, stream)``'s, whatever the robot);
+    :meth:`advance` steps until a robot finishes and returns it; the caller records the
+    episode (:meth:`result`) and begins the robot's next one, which makes its first step
+    in the next tick. With one robot this is :class:`Episodes`, step for step.
+    """
+
+    def __init__(
+        self,
+        envs: list[KoolioEnv],
+        agents: list[Agent],
+        seed: int,
+        stream: int = TRAIN_STREAM,
+        learn: bool = True,
+        epsilon: float | None = None,
+    ) -> None:
+        if len(envs) != len(agents) or not envs:
+            raise ValueError("one env and one learner per robot, at least one robot")
+        self.envs, self.agents = envs, agents
+        self.seed, self.stream, self.learn, self.epsilon = seed, stream, learn, epsilon
+        self.loops = [Episodes(e, a, seed, stream, learn, epsilon) for e, a in zip(envs, agents)]
+        self.episodes = [-1] * len(envs)
+        """Each robot's current (or last) episode number."""
+        self.running = [False] * len(envs)
+        """Which robots have an episode under way."""
+        self._cursor = 0
+        self.python_reason: str | None = "the Python loop"
+        """Why these episodes run in Python (None: on the compiled engine)."""
+
+    def __len__(self) -> int:
+        return len(self.envs)
+
+    def begin(self, r: int, episode: int, options: dict[str, Any] | None = None) -> None:
+        """Start robot ``r``'s episode ``episode`` (:meth:`Episodes.begin`)."""
+        self.loops[r].begin(episode, options)
+        self.episodes[r] = episode
+        self.running[r] = True
+
+    def advance(self, stop: Callable[[], bool | None] | None = None) -> int | None:
+        """Step the running robots in tick order until one finishes its episode: its
+        index; None when ``stop`` (asked after every tick) answered true, or when no robot
+        is running."""
+        loops, running, n = self.loops, self.running, len(self.loops)
+        while any(running):
+            for r in range(self._cursor, n):
+                if running[r] and loops[r].step() is not None:
+                    running[r] = False
+                    self._cursor = r + 1
+                    return r
+            self._cursor = 0
+            if stop is not None and stop():
+                return None
+        return None
+
+    def outcome(self, r: int) -> str | None:
+        """How robot ``r``'s last episode ended (None while it runs)."""
+        return self.loops[r].outcome
+
+    def result(
+        self, r: int, outcome: str | None = None, episode: int | None = None
+    ) -> EpisodeResult:
+        """Robot ``r``'s episode row (:meth:`Episodes.result`)."""
+        return self.loops[r].result(outcome, episode)
+
+    def release(self, r: int) -> None:
+        """Robot ``r`` starts no more episodes (its unfinished one, if any, is dropped)."""
+        self.running[r] = False
+
+    def sync_table(self) -> None:
+        """The Q-table holds every update made (the Python learners write it directly)."""
+
+    def sync(self) -> None:
+        """The table, the envs and the learners hold the state reached (they do)."""
+
+    def discard(self, robots: list[int]) -> list[int]:
+        """Taking back the unfinished episodes' writes needs the engine's journal."""
+        raise ValueError("discard: the Python loop keeps no journal of the writes")
+
+
+def robots(
+    envs: list[KoolioEnv] | KoolioEnv,
+    agents: list[Agent],
+    seed: int,
+    stream: int = TRAIN_STREAM,
+    learn: bool = True,
+    epsilon: float | None = None,
+    compiled: bool = True,
+    journal: bool = False,
+) -> Robots:
+    """The episodes of ``len(agents)`` robots (``envs``: one per robot, or one env and
+    the batch is made of it and its siblings): on the compiled step engine
+    (:class:`~koolio_pymunk.learning.engine.Engine`) when ``compiled`` and it runs them,
+    else the Python loop (:class:`Robots`); :attr:`Robots.python_reason` says why the
+    Python loop (None: the engine)."""
+    n = len(agents)
+    if isinstance(envs, KoolioEnv):
+        envs = [envs] + [envs.sibling() for _ in range(n - 1)]
+    reason = "not asked for" if not compiled else None
+    if reason is None:
+        from .engine import why_not
+
+        reason = next((w for w in (why_not(e, a) for e, a in zip(envs, agents)) if w), None)
+    if reason is not None:
+        loop = Robots(envs, agents, seed, stream, learn, epsilon)
+    else:
+        from ..task.batch import EnvBatch
+        from .engine import Engine
+
+        loop = Engine(EnvBatch(envs), agents, seed, stream, learn, epsilon, journal)
+    loop.python_reason = reason
+    return loop

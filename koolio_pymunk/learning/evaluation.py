@@ -60,7 +60,8 @@ from ..store.files import atomic_write, check_path, file_error, read_text
 from ..store.locks import FileLock
 from ..task.env import KoolioEnv
 from ..world.arena import arena_record
-from .episodes import EVAL_STREAM, Episodes
+from .episodes import EVAL_STREAM, EpisodeResult
+from .episodes import robots as make_robots
 from .qlearning import QLearner
 from .qtable import QTable, QTableStore, sensor_signature
 
@@ -118,6 +119,8 @@ def evaluate(
     goal: str | None = None,
     epsilon: float = 0.0,
     stop: Callable[[], bool] | None = None,
+    robots: int = 1,
+    compiled: bool = True,
 ) -> EvalResult:
     """Run ``table``'s policy for ``episodes`` episodes without learning (module doc).
 
@@ -129,31 +132,53 @@ def evaluate(
     ``epsilon`` 0 is the greedy policy; above 0 a uniform random action is taken with that
     probability, drawn from each episode's seeded generator. ``stop`` is asked before each
     episode; a true answer raises :class:`EvaluationStopped`.
+
+    ``robots`` > 1 plays that many episodes at once (``env`` and its siblings, on the
+    compiled step engine when it runs this configuration, ``compiled``): episode ``e``
+    has its own seeds whichever robot plays it and the table is only read, so the scores
+    are exactly those of one episode after another.
     """
     options = {"goal": goal} if goal else None
     env.check_options(options)
-    agent = QLearner(table, env.config.learner, None)
-    loop = Episodes(env, agent, seed, EVAL_STREAM, learn=False, epsilon=epsilon)
-    outcomes: list[str] = []
-    steps: list[int] = []
-    bumps: list[int] = []
-    rewards: list[float] = []
-    for e in range(episodes):
+    n = max(1, min(robots, episodes))
+    agents = [QLearner(table, env.config.learner, None) for _ in range(n)]
+    loop = make_robots(env, agents, seed, EVAL_STREAM, learn=False, epsilon=epsilon,
+                       compiled=compiled)  # fmt: skip
+    results: list[EpisodeResult | None] = [None] * episodes
+    started = 0
+
+    def start(r: int) -> None:
+        nonlocal started
+        if started == episodes:
+            loop.release(r)
+            return
         if stop is not None and stop():
             raise EvaluationStopped
-        loop.begin(e, options)
-        res = loop.run()
-        outcomes.append(res.outcome)
-        steps.append(res.steps)
-        bumps.append(res.bumps)
-        rewards.append(res.reward)
-    n = max(1, episodes)
+        loop.begin(r, started, options)
+        started += 1
+
+    for r in range(n):
+        start(r)
+    for _ in range(episodes):
+        r = loop.advance()
+        if r is None:  # pragma: no cover (a robot runs while episodes are left)
+            break
+        res = loop.result(r)
+        results[res.episode] = res
+        start(r)
+    loop.sync()
+    done = [res for res in results if res is not None]
+    outcomes = [res.outcome for res in done]
+    steps = [res.steps for res in done]
+    bumps = [res.bumps for res in done]
+    rewards = [res.reward for res in done]
+    n_done = max(1, episodes)
     return EvalResult(
         episodes=episodes,
-        goal_rate=outcomes.count("goal") / n,
-        end_of_world_rate=outcomes.count("end_of_world") / n,
-        truncated_rate=outcomes.count("truncated") / n,
-        wrong_door_rate=outcomes.count("wrong_door") / n,
+        goal_rate=outcomes.count("goal") / n_done,
+        end_of_world_rate=outcomes.count("end_of_world") / n_done,
+        truncated_rate=outcomes.count("truncated") / n_done,
+        wrong_door_rate=outcomes.count("wrong_door") / n_done,
         mean_steps=float(np.mean(steps)) if steps else 0.0,
         mean_bumps=float(np.mean(bumps)) if bumps else 0.0,
         mean_reward=float(np.mean(rewards)) if rewards else 0.0,
@@ -343,6 +368,7 @@ class PeriodicCheck:
         """The kept best table's ``best`` record (None: no best yet)."""
         self.last = 0
         """The ``episode`` of the last row of the evaluations file (0: none)."""
+        self._env: KoolioEnv | None = None
 
     @classmethod
     def open(
@@ -433,8 +459,10 @@ class PeriodicCheck:
         (nothing written)."""
         episode = int(table.meta.get("episodes", 0))
         started = time.perf_counter()
+        if self._env is None:  # the training robots' envs are busy: a robot of its own
+            self._env = env.sibling()
         try:
-            result = evaluate(env, table, self.episodes, self.seed, stop=stop)
+            result = evaluate(self._env, table, self.episodes, self.seed, stop=stop)
         except EvaluationStopped:
             return None
         c = Check(episode, result, self.seed, time.perf_counter() - started)

@@ -1,9 +1,10 @@
-"""``koolio-pm train`` and ``eval``: many episodes of one robot, with the run's files.
+"""``koolio-pm train``: many episodes of one robot or several, with the run's files.
 
-The episodes themselves run in :mod:`koolio_pymunk.learning.episodes` (the one episode
-loop, with the seeding); this module adds what a run around them needs. Evaluation
-(``eval``, and the periodic checks and best table of ``train --eval-every``) is
-:mod:`koolio_pymunk.learning.evaluation`; :func:`evaluate` is re-exported here.
+The episodes themselves run in :mod:`koolio_pymunk.learning.episodes` (the episode loop,
+the seeding, N robots in tick order) on the compiled step engine
+(:mod:`koolio_pymunk.learning.engine`); this module adds what a run around them needs.
+Evaluation (``eval``, and the periodic checks and best table of ``train --eval-every``) is
+:mod:`koolio_pymunk.learning.evaluation`.
 
 **Files.** :class:`RunFiles` holds a run's Q-table
 (:class:`~koolio_pymunk.learning.qtable.QTableStore`) and its per-episode CSV log
@@ -33,30 +34,17 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..store.episode_log import LOG_FIELDS as LOG_FIELDS  # the log's columns, re-exported
 from ..store.episode_log import LogWriter, RowRules, check_in_step, check_log_path, log_rows
 from ..store.errors import KoolioError, located
 from ..store.interrupts import SafeInterrupt
 from ..store.locks import check_lock_file
-from ..store.worlds import world_label as world_label  # how a table names a world
+from ..store.worlds import world_label
 from ..task.env import KoolioEnv
 from ..world.arena import arena_path, arena_record, load_arena
 from .algorithms import attach, make_learner
-from .episodes import (
-    EVAL_STREAM,
-    INTERRUPTED,
-    TRAIN_STREAM,
-    EpisodeResult,
-    Episodes,
-)
-from .evaluation import (
-    DEFAULT_EVAL_EPISODES,
-    Check,
-    EvalResult,
-    PeriodicCheck,
-    check_not_best,
-    evaluate,
-)
+from .episodes import INTERRUPTED, TRAIN_STREAM, EpisodeResult, Robots
+from .episodes import robots as make_robots
+from .evaluation import DEFAULT_EVAL_EPISODES, Check, PeriodicCheck, check_not_best
 from .qtable import (
     QTable,
     QTableStore,
@@ -65,23 +53,6 @@ from .qtable import (
     load_qtable,
     sensor_signature,
 )
-
-__all__ = [
-    "EVAL_STREAM",
-    "LOG_FIELDS",
-    "TRAIN_STREAM",
-    "EpisodeResult",
-    "EvalResult",
-    "Progress",
-    "RunFiles",
-    "TrainResult",
-    "arena_goal",
-    "evaluate",
-    "run_record",
-    "table_arena_goal",
-    "train",
-    "world_label",
-]
 
 
 @dataclass
@@ -311,11 +282,12 @@ class RunFiles:
             self.save()
         self.log.write(res)
 
-    def folded(self, res: EpisodeResult) -> None:
-        """Record unfinished episode ``res`` whose updates stay in the table (Exit): the
-        table saved (its episode count unchanged), the row logged ``interrupted``."""
+    def folded(self, *results: EpisodeResult) -> None:
+        """Record unfinished episodes whose updates stay in the table (Exit): the table
+        saved (its episode count unchanged), each row logged ``interrupted``."""
         self.save()
-        self.log.write(res)
+        for res in results:
+            self.log.write(res)
 
     def save(self) -> None:
         """Write the table (and its backup) now."""
@@ -346,6 +318,8 @@ class TrainResult:
     results: list[EpisodeResult]
     checks: list[Check] = field(default_factory=list)
     """The periodic checks the run made (``eval_every``)."""
+    python_reason: str | None = None
+    """Why the run stepped in the Python loop (None: on the compiled engine)."""
 
 
 def train(
@@ -359,33 +333,63 @@ def train(
     report_every: float = 1.0,
     eval_every: int = 0,
     eval_episodes: int = DEFAULT_EVAL_EPISODES,
-    save_every: int = 1,
+    save_every: int | None = None,
     save_seconds: float | None = None,
     compiled: bool = True,
+    robots: int = 1,
 ) -> TrainResult:
-    """Train for ``episodes`` more episodes (``koolio-pm train --episodes N`` is the
-    total the table reaches: it passes N minus the episodes already held), saving the
-    table after each one (the paper's rule), or every ``save_every`` episodes and/or
+    """Train ``robots`` robots for ``episodes`` more episodes into one table (``koolio-pm
+    train --episodes N`` is the total the table reaches: it passes N minus the episodes
+    already held), saving the table after each finished episode (the paper's rule, the
+    default with one robot), or every ``save_every`` episodes (default: ``robots``) and/or
     every ``save_seconds`` seconds, and always at the end.
 
-    Ctrl-C or SIGTERM (KeyboardInterrupt) is the paper's Exit: the unfinished episode's
-    updates are kept and the table saved; with ``discard_unfinished`` it is Exit Without
-    Save: nothing more is written, the table file stays as it was at its last save (after
+    **Robots.** Each robot runs its own episodes in its own copy of the arena (``env`` is
+    robot 0's; the others are its siblings) and learns into the shared table; the robots
+    step in tick order (:class:`~koolio_pymunk.learning.episodes.Robots`). Episode starts
+    are numbered from the table's count in the order they begin (robot order at first,
+    then as robots finish), and a start's number gives its seeds and its epsilon; finished
+    episodes are numbered in the order they finish, which is the log's order. With one
+    robot both are the episode's number, and the run is the paper's loop exactly. A run
+    resumed with several robots starts new episodes from the saved table: seeded, but not
+    the uninterrupted run's continuation, whose robots were mid-episode at the save.
+
+    Ctrl-C or SIGTERM (KeyboardInterrupt) is the paper's Exit: the unfinished episodes'
+    updates are kept and the table saved, each logged ``interrupted`` (numbered as the
+    episodes that follow); with ``discard_unfinished`` it is Exit Without Save: with one
+    robot nothing more is written, the table file stays as it was at its last save (after
     the last finished episode with the default saving; with a longer cadence the log is
     then ahead of it, as after a SIGKILL, and resuming moves those rows aside and runs
-    their episodes again, identically). Ctrl-C takes effect between steps
-    (:class:`SafeInterrupt`). The table and the log are locked while it
-    runs (:meth:`RunFiles.open`); a failed write (disk full) stops it with a
+    their episodes again, identically); with several, every write of an unfinished
+    episode that no other robot wrote over since is taken back and the finished ones are
+    saved. Ctrl-C takes effect between steps (:class:`SafeInterrupt`; compiled, between
+    chunks of steps). The table and the log are locked while it runs
+    (:meth:`RunFiles.open`); a failed write (disk full) stops it with a
     :class:`~koolio_pymunk.store.errors.FileError`, the files holding the last good table.
 
-    ``compiled`` (the default) runs each episode's steps in one compiled call when the
-    learner and the world allow it (:mod:`koolio_pymunk.learning.episode_kernel`: the
-    same steps, bit for bit); False always runs the Python loop (the reference).
+    ``compiled`` (the default) runs the steps on the compiled step engine when the learner
+    and the world allow it (:mod:`koolio_pymunk.learning.engine`: the same steps, bit for
+    bit); False always runs the Python loop (the reference). :attr:`TrainResult.python_reason`
+    says why a run stepped in Python.
 
     ``eval_every`` N > 0: a greedy check of ``eval_episodes`` episodes each time the
     table's episode count reaches a multiple of N, and the best table kept
-    (:mod:`koolio_pymunk.learning.evaluation`); the training itself is the same.
+    (:mod:`koolio_pymunk.learning.evaluation`); the training itself is the same. With
+    several robots a check reads the table as it stands when that episode finishes (the
+    other robots' episodes under way included).
     """
+    n = max(1, min(robots, episodes)) if episodes > 0 else max(1, robots)
+    cfg = env.config
+    loop_reason = _python_reason(env, compiled)
+    if robots > 1 and discard_unfinished and loop_reason is not None:
+        raise KoolioError(
+            located(
+                f"--robots {robots}",
+                "--discard-unfinished",
+                f"taking back the unfinished episodes' writes needs the compiled engine's "
+                f"journal, and this run steps in Python ({loop_reason})",
+            )
+        )
     checker = None
     if eval_every:
         checker = PeriodicCheck.open(env, store, log_path, eval_every, eval_episodes, seed)
@@ -395,53 +399,82 @@ def train(
         if checker is not None:
             checker.close()
         raise
-    files.save_every, files.save_seconds = max(1, save_every), save_seconds
+    files.save_every = max(1, save_every if save_every is not None else robots)
+    files.save_seconds = save_seconds
     table, first = files.table, files.first
     table.meta.pop("best", None)  # a kept best table trained on is no longer its check's
+    agents = [make_learner(table, cfg.learner, None, str(store.path)) for _ in range(n)]
+    journal = discard_unfinished and n > 1
+    loop = make_robots(env, agents, seed, TRAIN_STREAM, compiled=compiled, journal=journal)
+    files.before_save = loop.sync_table
     progress = Progress()
     results: list[EpisodeResult] = []
     checks: list[Check] = []
-    agent = make_learner(table, env.config.learner, None, str(store.path))
-    loop = Episodes(env, agent, seed, TRAIN_STREAM, compiled=compiled)
     last_report = time.perf_counter()
     interrupted = False
+    started = finished = 0
+    tail = f"  robots {n}" if robots > 1 else ""
+
+    def start(r: int) -> None:
+        nonlocal started
+        if started < episodes:
+            loop.begin(r, first + started)
+            started += 1
+        else:
+            loop.release(r)
+
     try:
         with SafeInterrupt() as guard:
             try:
                 if checker is not None:
                     checker.resume(first, _warn)
                     # the check of a table saved at a multiple of N whose row is missing
-                    interrupted = _check(checker, env, table, first, guard, checks, report)
-                for e in range(first, first + episodes):
-                    if guard.pending:  # between episodes: nothing unfinished
-                        interrupted = True
+                    interrupted = _check(checker, env, loop, first, guard, checks, report)
+                if not interrupted and not guard.pending:
+                    for r in range(n):
+                        start(r)
+                while finished < episodes and not interrupted:
+                    if guard.pending:
+                        if any(loop.running):
+                            guard.check()  # Exit: the episodes under way are folded in
+                        interrupted = True  # between episodes: nothing unfinished
                         if report:
                             report("interrupted between episodes: nothing unfinished")
                         break
-                    loop.begin(e)
-                    res = loop.run(stop=guard.check)
+                    r = loop.advance(stop=guard.check)
+                    if r is None:  # no robot running (cannot happen with episodes left)
+                        break
+                    res = loop.result(r, episode=first + finished)
+                    finished += 1
                     files.finished(res)
                     results.append(res)
                     progress.add(res)
                     now = time.perf_counter()
-                    if report and (now - last_report >= report_every or e == first + episodes - 1):
-                        report(progress.line(e + 1, first + episodes, agent.epsilon))
+                    if report and (now - last_report >= report_every or finished == episodes):
+                        eps = loop.agents[r].epsilon
+                        report(progress.line(first + finished, first + episodes, eps) + tail)
                         last_report = now
-                    if checker is not None:
-                        if files.unsaved and checker.due(e + 1):
+                    if checker is not None and checker.due(first + finished):
+                        if files.unsaved:
                             files.save()  # a check row is never ahead of the table's file
-                        interrupted = _check(checker, env, table, e + 1, guard, checks, report)
+                        interrupted = _check(
+                            checker, env, loop, first + finished, guard, checks, report
+                        )
+                    start(r)
                 if files.unsaved:  # the end (or a stop between episodes): always saved
                     files.save()
             except KeyboardInterrupt:
                 interrupted = True
-                table = _interrupted(loop, files, discard_unfinished, results, report)
+                table = _interrupted(loop, files, discard_unfinished, results, report, finished)
     finally:
         try:
-            files.close()
+            loop.sync()  # the envs and learners as the Python steps would leave them
         finally:
-            if checker is not None:
-                checker.close()
+            try:
+                files.close()
+            finally:
+                if checker is not None:
+                    checker.close()
     return TrainResult(
         table,
         progress.episodes,
@@ -451,7 +484,17 @@ def train(
         interrupted,
         results,
         checks,
+        loop.python_reason,
     )
+
+
+def _python_reason(env: KoolioEnv, compiled: bool) -> str | None:
+    """Why a training run in ``env`` steps in the Python loop (None: on the engine)."""
+    if not compiled:
+        return "not asked for"
+    from .engine import why_not_config
+
+    return why_not_config(env)
 
 
 def _warn(message: str) -> None:
@@ -461,7 +504,7 @@ def _warn(message: str) -> None:
 def _check(
     checker: PeriodicCheck,
     env: KoolioEnv,
-    table: QTable,
+    loop: Robots,
     episodes: int,
     guard: SafeInterrupt,
     checks: list[Check],
@@ -472,7 +515,8 @@ def _check(
     episode."""
     if not checker.due(episodes):
         return False
-    c = checker.check(env, table, stop=lambda: guard.pending)
+    loop.sync_table()
+    c = checker.check(env, loop.agents[0].table, stop=lambda: guard.pending)
     if c is None:
         if report:
             report(f"interrupted: the check at episode {episodes} dropped (it runs on resume)")
@@ -491,21 +535,38 @@ def _check(
 
 
 def _interrupted(
-    loop: Episodes,
+    loop: Robots,
     files: RunFiles,
     discard: bool,
     results: list[EpisodeResult],
     report: Callable[[str], None] | None,
+    finished: int,
 ) -> QTable:
-    """Ctrl-C in an episode: Exit (fold it in, save, log it ``interrupted``) or Exit Without
-    Save (the file still holds the table of the last finished episode)."""
+    """Ctrl-C with episodes under way: Exit (fold them in, save, log each ``interrupted``)
+    or Exit Without Save (one robot: the file still holds the table of the last finished
+    episode; several: their writes taken back, the finished episodes saved)."""
+    running = [r for r in range(len(loop)) if loop.running[r]]
     if discard:
+        if len(loop) == 1:
+            if report:
+                report("interrupted: unfinished episode discarded (Exit Without Save)")
+            return load_qtable(files.store.path)
+        for key in loop.discard(running):
+            files.table.rows.pop(key, None)
+        loop.sync_table()
+        files.save()
         if report:
-            report("interrupted: unfinished episode discarded (Exit Without Save)")
-        return load_qtable(files.store.path)
-    res = loop.result(INTERRUPTED, episode=files.table.meta.get("episodes", files.first))
-    files.folded(res)
-    results.append(res)
+            report(
+                f"interrupted: {len(running)} unfinished episodes discarded, {finished} "
+                "finished ones kept (Exit Without Save)"
+            )
+        return files.table
+    loop.sync_table()
+    first = int(files.table.meta.get("episodes", files.first))
+    rows = [loop.result(r, INTERRUPTED, episode=first + k) for k, r in enumerate(running)]
+    files.folded(*rows)
+    results.extend(rows)
     if report:
-        report("interrupted: unfinished episode folded into the Q-table and saved (Exit)")
+        what = "unfinished episode" if len(loop) == 1 else "unfinished episodes"
+        report(f"interrupted: {what} folded into the Q-table and saved (Exit)")
     return files.table

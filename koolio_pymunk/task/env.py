@@ -271,6 +271,17 @@ class KoolioEnv(gym.Env):
             self._renderer.close()
             self._renderer = None
 
+    def sibling(self) -> KoolioEnv:
+        """A new env of this one's arena, configuration, world and goal (``random``
+        included), with a world, sensors, memory and generator of its own: another robot
+        of a batch (:class:`~koolio_pymunk.task.batch.EnvBatch`). No window."""
+        goal = "random" if self.random_goal else None
+        other = KoolioEnv(self.arena, config=self.config, goal=goal)
+        other.world_name = self.world_name
+        if other.goal_name != self.goal_name:  # a reset option made another goal active
+            other.set_goal(self.goal_name)
+        return other
+
     # -- fast path (used by the learner; no observation array, no info dict) ----------
     def reset_key(self, options: dict[str, Any] | None = None) -> int:
         """Reset without building obs/info; returns the state key. Call ``reset`` first

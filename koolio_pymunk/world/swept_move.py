@@ -17,7 +17,11 @@ call, for compiled loops that move robots themselves (an episode or a fleet step
   never longer than what remains), which cannot change the answer.
 
 :func:`move` is a Forward / Reverse of ``distance`` along ``heading``, as
-:meth:`~koolio_pymunk.world.physics.World.move` computes it.
+:meth:`~koolio_pymunk.world.physics.World.move` computes it; :func:`act` is any of the
+five actions, with a real drive's errors when they are on, as
+:meth:`~koolio_pymunk.world.physics.World.act` and
+:meth:`~koolio_pymunk.world.physics.World.drive` (with
+:class:`~koolio_pymunk.world.motion_errors.MotionErrors`' draws) leave the robot.
 ``tests/world/test_segment_query.py`` and ``tools/agreement.py --moves N`` hold both to
 pymunk's answers: the same end position, bit for bit, over random moves in every shipped
 arena and in generated ones.
@@ -45,7 +49,7 @@ import numba
 import numpy as np
 
 from ..store.kernel_cache import ensure_fresh
-from .physics import ALONG, MAX_QUERIES, MIN_SLIDE, SKIN
+from .physics import ALONG, MAX_QUERIES, MIN_SLIDE, SKIN, TWO_PI
 from .segment_query import _CULL_MARGIN, first_contact
 
 ensure_fresh()  # numba's cache, in step with every kernel's source (see there)
@@ -119,3 +123,47 @@ def move(
     :meth:`~koolio_pymunk.world.physics.World.move` (and :meth:`~World.act`'s Forward and
     Reverse) leave it."""
     return sweep(walls, x, y, distance * math.cos(heading), distance * math.sin(heading), radius)
+
+
+#: :func:`act`'s ``motion`` when the drive has no errors: ``(on, drift, drift sigma, slip
+#: sigma, turn sigma)``.
+NO_MOTION_ERRORS = (0.0, 0.0, 0.0, 0.0, 0.0)
+
+
+@numba.njit(cache=True)
+def act(action: int, x: float, y: float, h: float, rng, world: tuple, motion) -> tuple:
+    """The pose after ``action`` (0 Stop, 1 RotateLeft, 2 RotateRight, 3 Forward, 4
+    Reverse): :meth:`World.act`, or with a real drive's errors (``motion[0]`` on; the
+    draws from ``rng``) ``KoolioEnv._act_with_errors`` (:class:`MotionErrors`' turn and
+    move, :meth:`World.drive`'s chord). ``world`` = ``(walls, radius, move distance, turn
+    arc)``; ``motion`` = ``(on, drift, drift sigma, slip sigma, turn sigma)``."""
+    walls, radius, distance, arc = world[0], world[1], world[2], world[3]
+    on, drift, drift_sigma, slip_sigma, turn_sigma = (motion[0], motion[1], motion[2],
+                                                      motion[3], motion[4])  # fmt: skip
+    if action == 0:
+        return x, y, h
+    if on == 0.0:
+        if action == 1:
+            return x, y, (h + arc) % TWO_PI
+        if action == 2:
+            return x, y, (h - arc) % TWO_PI
+        d = distance if action == 3 else -distance
+        x, y = sweep(walls, x, y, d * math.cos(h), d * math.sin(h), radius)
+        return x, y, h
+    if action == 1 or action == 2:
+        turn = arc + turn_sigma * rng.standard_normal() if turn_sigma > 0.0 else arc
+        return x, y, (h + (turn if action == 1 else -turn)) % TWO_PI
+    sign = 1.0 if action == 3 else -1.0
+    turn = sign * drift
+    if drift_sigma > 0.0 or slip_sigma > 0.0:
+        e0 = rng.standard_normal()  # MotionErrors.move's standard_normal(2), one by one
+        e1 = rng.standard_normal()
+        turn += drift_sigma * e0
+        distance = max(0.0, distance * (1.0 + slip_sigma * e1))
+    d = sign * distance
+    if d != 0.0:
+        half = 0.5 * turn
+        chord = d if half == 0.0 else d * (math.sin(half) / half)
+        mid = h + half
+        x, y = sweep(walls, x, y, chord * math.cos(mid), chord * math.sin(mid), radius)
+    return x, y, (h + turn) % TWO_PI

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from koolio_pymunk.learning.episode_agreement import compare_episodes
 
 from koolio_pymunk.learning import episode_kernel
 from koolio_pymunk.learning.algorithms import make_learner
-from koolio_pymunk.learning.episode_agreement import compare_episodes
 from koolio_pymunk.learning.episodes import INTERRUPTED, Episodes
 from koolio_pymunk.learning.qtable import QTable, QTableStore
 from koolio_pymunk.learning.training import train

@@ -8,9 +8,9 @@ import math
 
 import numpy as np
 import pytest
+from koolio_pymunk.learning.fleet import _Run, train_many
 
 from koolio_pymunk.learning import fleet
-from koolio_pymunk.learning.fleet import _Run, train_many
 from koolio_pymunk.learning.qtable import QTableStore, load_qtable
 from koolio_pymunk.learning.training import LOG_FIELDS
 from koolio_pymunk.store.config import Config
@@ -158,6 +158,7 @@ def test_backend_pymunk_senses_the_same_with_many_robots(tmp_path) -> None:
 
 def test_in_zone_matches_end_zones_contains() -> None:
     from koolio_pymunk.learning.fleet_kernel import in_zone, zone_arrays
+
     from koolio_pymunk.task.end_zones import EndZones
 
     for name in ("hallway", "room", "obstacles"):
@@ -175,6 +176,7 @@ def test_in_zone_matches_end_zones_contains() -> None:
 
 def test_update_and_choose_match_the_learner() -> None:
     from koolio_pymunk.learning.fleet_kernel import SharedTable, choose, update
+
     from koolio_pymunk.learning.qlearning import QLearner
     from koolio_pymunk.learning.qtable import QTable
     from koolio_pymunk.store.config import LearnerConfig
@@ -226,6 +228,7 @@ def test_learn_judges_like_the_rules(goal_close: bool, eow: bool, bump: bool) ->
         reward_array,
         zone_arrays,
     )
+
     from koolio_pymunk.learning.qtable import QTable
     from koolio_pymunk.store.config import RewardConfig
     from koolio_pymunk.store.keyword import KeywordLayout
@@ -268,6 +271,7 @@ def test_move_all_moves_every_robot_as_the_pymunk_world_does(arena_name) -> None
     ``World.act`` on the same actions: positions in the copies, arena positions and
     headings equal bit for bit, tick after tick."""
     from koolio_pymunk.learning.fleet_kernel import move_all
+
     from koolio_pymunk.world.segment_query import wall_array
 
     arena = load_arena(arena_name)

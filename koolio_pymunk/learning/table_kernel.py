@@ -1,0 +1,329 @@
+"""The learners' compiled pieces: one Q-table shared by the robots of the step engine.
+
+:class:`SharedTable` mirrors a :class:`~koolio_pymunk.learning.qtable.QTable` in arrays a
+compiled loop can use: a typed dict from state key to row, a ``(capacity, n_actions)``
+array of values and a dirty flag per row; :meth:`SharedTable.sync` writes the dirty rows
+back into the ``QTable`` (before every save and every check). The kernels, each the
+compiled twin of the Python code it names (same float64 operations in the same order, the
+same draws from the same generators):
+
+* :func:`choose`: ``QLearner.act``'s epsilon-greedy choice with random tie-breaking and
+  the no-undo rule (``learner.no_undo``, :mod:`~koolio_pymunk.learning.action_rules`);
+* :func:`update`: Table 11 (``qlearning.td_target``/``td_step``, ``QLearner.update``);
+* :func:`lambda_update`: Watkins's Q(lambda)'s traced update (``QLambda.observe``), with
+  :func:`not_greedy`, its cut;
+* the *journal* (:func:`new_journal`): every write of a robot's running episode (row,
+  action, order, value before and after), so that the writes of episodes still running
+  can be taken back (``--discard-unfinished`` with many robots: :func:`undo_writes`).
+
+``tests/learning/test_engine.py`` holds them to the Python learners bit for bit.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+from numba import types
+from numba.typed import Dict
+
+from ..sensing.inline_twins import inline_twin
+from ..store.kernel_cache import ensure_fresh
+from .action_rules import allowed_action, barred
+from .qtable import QTable
+
+ensure_fresh()  # numba's cache, in step with every kernel's source (see there)
+
+#: ``action_rules.barred`` and ``allowed_action``, compiled from the same Python code.
+_barred = numba.njit(cache=True)(barred)
+_allowed_action = numba.njit(cache=True)(allowed_action)
+
+
+class SharedTable:
+    """A QTable's rows as a typed dict + arrays (see the module doc)."""
+
+    def __init__(self, table: QTable, reserve: int = 1024) -> None:
+        self.table = table
+        self.n_actions = table.layout.n_actions
+        self.q_init = table.q_init
+        n = len(table.rows)
+        cap = max(reserve, 2 * n)
+        self.q = np.empty((cap, self.n_actions))
+        self.keys = np.empty(cap, np.int64)
+        self.dirty = np.zeros(cap, np.bool_)
+        self.count = np.array([n], np.int64)
+        if n:
+            self.keys[:n] = np.fromiter(table.rows, np.int64, n)
+            self.q[:n] = np.array(list(table.rows.values()), dtype=np.float64)
+        self.index = _build_index(self.keys, n)  # compiled: no typed-dict calls from Python
+
+    @property
+    def capacity(self) -> int:
+        """Rows the arrays hold before :meth:`reserve` must grow them."""
+        return int(self.q.shape[0])
+
+    def reserve(self, extra: int) -> None:
+        """Room for ``extra`` more rows (the kernels never grow the arrays)."""
+        n, cap = int(self.count[0]), self.q.shape[0]
+        if n + extra <= cap:
+            return
+        new = max(2 * cap, n + extra)
+        q = np.empty((new, self.n_actions))
+        q[:n] = self.q[:n]
+        keys = np.empty(new, np.int64)
+        keys[:n] = self.keys[:n]
+        dirty = np.zeros(new, np.bool_)
+        dirty[:n] = self.dirty[:n]
+        self.q, self.keys, self.dirty = q, keys, dirty
+
+    def sync(self) -> None:
+        """Write the rows changed since the last sync into the QTable."""
+        rows = self.table.rows
+        for i in np.flatnonzero(self.dirty[: int(self.count[0])]).tolist():
+            rows[int(self.keys[i])] = self.q[i].tolist()
+        self.dirty[:] = False
+
+    def row_of(self, key: int) -> int:
+        """The row of state ``key`` (-1: none)."""
+        return int(find_row(self.index, key))
+
+    def args(self) -> tuple:
+        """The kernels' table group ``(q, keys, dirty, count, q_init)``; the typed dict
+        :attr:`index` goes beside it (a tuple holding a typed dict costs numba's slow
+        argument typing at every call)."""
+        return (self.q, self.keys, self.dirty, self.count, self.q_init)
+
+
+@numba.njit(cache=True)
+def _build_index(keys: np.ndarray, n: int):
+    """Typed dict ``keys[i] -> i`` for the first ``n`` keys."""
+    index = Dict.empty(key_type=types.int64, value_type=types.int64)
+    for i in range(n):
+        index[keys[i]] = i
+    return index
+
+
+@numba.njit(cache=True)
+def find_row(index, key: int) -> int:
+    """The row of ``key``, -1 when missing."""
+    if key in index:
+        return index[key]
+    return -1
+
+
+@numba.njit(cache=True)
+def row_of(index, table: tuple, key: int) -> int:
+    """The row of ``key``, created at ``q_init`` when missing (``QTable.row``);
+    ``table`` is :meth:`SharedTable.args`."""
+    q, keys, dirty, count, q_init = table
+    i = find_row(index, key)
+    if i < 0:
+        i = count[0]
+        index[key] = i
+        keys[i] = key
+        for a in range(q.shape[1]):
+            q[i, a] = q_init
+        dirty[i] = True
+        count[0] += 1
+    return i
+
+
+@numba.njit(cache=True)
+def td_target(index, table: tuple, gamma: float, reward: float, nxt: int, terminal: bool) -> float:
+    """``qlearning.td_target``: the reward alone after a terminal step, else ``reward +
+    gamma * max`` of ``nxt``'s row (``q_init`` for a state never visited)."""
+    if terminal:
+        return reward
+    j = find_row(index, nxt)
+    return reward + gamma * (table[0][j].max() if j >= 0 else table[4])
+
+
+def new_journal(robots: int, capacity: int) -> tuple[np.ndarray, ...]:
+    """Empty journal arrays (``capacity`` 0: no journal): ``jint[r, k]`` = row, action,
+    order, created; ``jf[r, k]`` = before, after; ``jn[r]`` entries of robot ``r``;
+    ``seq[0]`` the next order number."""
+    return (
+        np.zeros((robots, capacity, 4), np.int64),
+        np.zeros((robots, capacity, 2), np.float64),
+        np.zeros(robots, np.int64),
+        np.zeros(1, np.int64),
+    )
+
+
+def grow_journal(journal: tuple) -> tuple:
+    """``journal`` with twice the room per robot, its entries kept."""
+    jint, jf, jn, seq = journal
+    cap = jint.shape[1]
+    grown = new_journal(jint.shape[0], 2 * cap)
+    grown[0][:, :cap] = jint
+    grown[1][:, :cap] = jf
+    return (grown[0], grown[1], jn, seq)
+
+
+@numba.njit(cache=True)
+def _journal(journal: tuple, r: int, i: int, a: int, before: float, after: float,
+             created: bool) -> None:  # fmt: skip
+    """Record robot ``r``'s write of ``(i, a)`` (a journal of capacity 0: none)."""
+    jint, jf, jn, seq = journal
+    if jint.shape[1] == 0:
+        return
+    k = jn[r]
+    jint[r, k, 0] = i
+    jint[r, k, 1] = a
+    jint[r, k, 2] = seq[0]
+    jint[r, k, 3] = 1 if created else 0
+    jf[r, k, 0] = before
+    jf[r, k, 1] = after
+    jn[r] = k + 1
+    seq[0] += 1
+
+
+@numba.njit(cache=True)
+def update(index, table: tuple, alpha: float, gamma: float, state: int, action: int,
+           reward: float, nxt: int, terminal: bool, r: int, journal: tuple) -> None:  # fmt: skip
+    """``QLearner.update``: Table 11, no bootstrap from a terminal step (``table``:
+    :meth:`SharedTable.args`); the write journaled as robot ``r``'s."""
+    q, dirty, count = table[0], table[2], table[3]
+    before = count[0]
+    i = row_of(index, table, state)
+    old = q[i, action]
+    target = td_target(index, table, gamma, reward, nxt, terminal)
+    q[i, action] += alpha * (target - q[i, action])
+    dirty[i] = True
+    _journal(journal, r, i, action, old, q[i, action], count[0] > before)
+
+
+@numba.njit(cache=True)
+def lambda_update(
+    index, table: tuple, alpha: float, gamma: float, state: int, action: int, reward: float,
+    nxt: int, terminal: bool, lam: tuple, traces: tuple, r: int, journal: tuple,
+) -> None:  # fmt: skip
+    """``QLambda.observe``: the TD error of Table 11's target, the replacing trace of
+    ``(state, action)``, every traced entry moved by it and decayed, those below the
+    cutoff dropped (in order: the Python dict's order). ``traces`` = ``(rows, actions,
+    e, meta)`` of robot ``r``: the traced entries by table row, ``meta[0]`` their count,
+    ``meta[1]`` the state the next step is expected to start from (-1: none)."""
+    q, dirty, count = table[0], table[2], table[3]
+    decay, cutoff = lam[1], lam[2]
+    t_row, t_act, t_e, meta = traces
+    before = count[0]
+    i = row_of(index, table, state)
+    created = count[0] > before
+    target = td_target(index, table, gamma, reward, nxt, terminal)
+    step = alpha * (target - q[i, action])
+    n = meta[0]
+    k = 0
+    while k < n and t_row[k] != i:
+        k += 1
+    t_row[k] = i
+    t_act[k] = action
+    t_e[k] = 1.0
+    if k == n:
+        n += 1
+    kept = 0
+    for k in range(n):
+        row, a = t_row[k], t_act[k]
+        old = q[row, a]
+        q[row, a] += step * t_e[k]
+        dirty[row] = True
+        _journal(journal, r, row, a, old, q[row, a], created and row == i)
+        e = t_e[k] * decay
+        if not e < cutoff:
+            t_row[kept] = row
+            t_act[kept] = a
+            t_e[kept] = e
+            kept += 1
+    meta[0] = kept
+    meta[1] = -1 if terminal else nxt
+
+
+def undo_writes(shared: SharedTable, journal: tuple, robots: list[int]) -> list[int]:
+    """Take back the journaled writes of ``robots`` (their episodes are discarded), newest
+    first: an entry still holding the value the robot wrote gets its value from before;
+    one that another robot wrote over since keeps that robot's value. Returns the keys of
+    rows those robots created that are back at ``q_init`` in every action (the caller
+    drops them from the table: they were never visited by a kept episode)."""
+    jint, jf, jn, _ = journal
+    entries = sorted(
+        ((int(jint[r, k, 2]), r, k) for r in robots for k in range(int(jn[r]))), reverse=True
+    )
+    created = []
+    q = shared.q
+    for _, r, k in entries:
+        i, a = int(jint[r, k, 0]), int(jint[r, k, 1])
+        if q[i, a] == jf[r, k, 1]:
+            q[i, a] = jf[r, k, 0]
+            shared.dirty[i] = True
+        if jint[r, k, 3]:
+            created.append(i)
+    return [int(shared.keys[i]) for i in created if bool(np.all(q[i] == shared.q_init))]
+
+
+@numba.njit(cache=True)
+def _any_action(arng, n_actions: int, bar: int) -> int:
+    """``QLearner._any_action``: a uniform random action, not ``bar`` (-1: none barred)."""
+    if bar < 0:
+        return arng.integers(0, n_actions)
+    return _allowed_action(arng.integers(0, n_actions - 1), bar)
+
+
+@numba.njit(cache=True)
+def best_value(q: np.ndarray, i: int, n_actions: int, bar: int) -> float:
+    """The highest Q of row ``i`` over the actions but ``bar``."""
+    best = -np.inf
+    for a in range(n_actions):
+        if a != bar and q[i, a] > best:
+            best = q[i, a]
+    return best
+
+
+@numba.njit(cache=True)
+def choose(state: int, epsilon: float, arng, n_actions: int, index, q: np.ndarray,
+           bar: int = -1) -> tuple:  # fmt: skip
+    """``QLearner.act``: explore with probability epsilon, else greedy, ties at random;
+    never ``bar`` (``learner.no_undo``; -1: none barred). Returns the action and whether
+    it was the exploratory choice."""
+    if epsilon > 0.0 and arng.random() < epsilon:
+        return _any_action(arng, n_actions, bar), True
+    i = -1
+    if state in index:
+        i = index[state]
+    if i < 0:
+        return _any_action(arng, n_actions, bar), False
+    best = best_value(q, i, n_actions, bar)
+    ties = 0
+    for a in range(n_actions):
+        ties += a != bar and q[i, a] == best
+    pick = 0 if ties == 1 else arng.integers(0, ties)
+    for a in range(n_actions):
+        if a != bar and q[i, a] == best:
+            if pick == 0:
+                return a, False
+            pick -= 1
+    return 0, False
+
+
+@numba.njit(cache=True)
+def not_greedy(index, q: np.ndarray, state: int, action: int, bar: int = -1) -> bool:
+    """``QLambda.explore``'s cut: ``action`` is below the best of ``state``'s row over the
+    actions allowed (all but ``bar``; a state never visited has no row: no cut)."""
+    if state not in index:
+        return False
+    i = index[state]
+    return q[i, action] < best_value(q, i, q.shape[1], bar)
+
+
+#: The learners' kernels with every call that passes arrays compiled into them
+#: (:func:`~koolio_pymunk.sensing.inline_twins.inline_twin`), for the step engine's loop.
+_row_of_inline = inline_twin(row_of, find_row=inline_twin(find_row))
+_td_target_inline = inline_twin(td_target, find_row=inline_twin(find_row))
+_journal_inline = inline_twin(_journal)
+update_inline = inline_twin(
+    update, row_of=_row_of_inline, td_target=_td_target_inline, _journal=_journal_inline
+)
+lambda_update_inline = inline_twin(
+    lambda_update, row_of=_row_of_inline, td_target=_td_target_inline, _journal=_journal_inline
+)
+_best_value_inline = inline_twin(best_value)
+choose_inline = inline_twin(choose, _any_action=inline_twin(_any_action),
+                            best_value=_best_value_inline)  # fmt: skip
+not_greedy_inline = inline_twin(not_greedy, best_value=_best_value_inline)

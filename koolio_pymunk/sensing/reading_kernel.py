@@ -1,0 +1,153 @@
+"""One whole reading, compiled: the draws, the rays and cameras, the realism models, the
+read-out: :meth:`SensorSuite.sense <koolio_pymunk.sensing.suite.SensorSuite.sense>`'s twin.
+
+:func:`sense_reading` is ``KernelInputs.sense_readout`` without Python between its parts,
+for the compiled step (:mod:`koolio_pymunk.task.step_kernel`): the reading's noise draws
+from the robot's generator (the same scalar draws, one by one, as the reference's calls
+with a size make), :func:`~.ray_kernel.sense_one` and :func:`~.encoding_kernel.readout`,
+or with realism models on :func:`~.realism_kernel.sense_realism`. Its inputs are one
+suite's kernel groups and buffers (:func:`reading_group`).
+
+:class:`ReadingArrays` holds the inputs of N robots' readings (N suites of one
+configuration) for a compiled loop that steps them in turn: what every robot shares once
+(the rays' and cameras' geometry, the walls, the read-out), and a row per robot of what
+is its own (its goal and the other plates, its realism models' parameters, its working
+buffers); :func:`robot_group` makes robot ``r``'s :func:`reading_group` from them in
+compiled code. (A tuple of thirty arrays taken out of a container costs thirty atomic
+reference counts each way, about 0.2 µs, at every step; rows of shared arrays cost
+nothing.) :meth:`ReadingArrays.load` takes a suite's configuration after its reset;
+:meth:`ReadingArrays.store` gives it the last reading made in the rows, so that the suite's
+:meth:`~koolio_pymunk.sensing.suite.SensorSuite.last` reads it.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from ..store.kernel_cache import ensure_fresh
+from .encoding_kernel import readout_inline
+from .ray_kernel import sense_one_inline
+from .realism_kernel import sense_realism
+
+ensure_fresh()  # numba's cache, in step with every kernel's source (see there)
+
+
+def reading_group(suite) -> tuple:
+    """:func:`sense_reading`'s inputs for ``suite`` (a compiled-backend
+    :class:`~koolio_pymunk.sensing.suite.SensorSuite`) as it is configured now: a
+    domain-randomization draw or a new goal may replace some of its arrays, so the group
+    is made again after each reset."""
+    k = suite.kernel
+    n_draws = suite.realism.n_draws
+    flags = np.array([int(k.real_on), int(k.gaussian), k.n_raw, n_draws], np.int64)
+    u = np.empty(k.n_raw + n_draws)  # the realism path's draws
+    return (k.geometry, k.goal, k.plates, k.buffers, k.encoding, k.realism, k.noise, k.out,
+            k.codes, flags, u)  # fmt: skip
+
+
+@numba.njit(cache=True)
+def sense_reading(x: float, y: float, h: float, rng, sense: tuple) -> tuple[int, bool, bool]:
+    """``KernelInputs.sense_readout`` at ``(x, y, h)``: ``(state key, bump, goal close)``,
+    the reading left in the group's buffers. The draws go one by one into the buffers
+    ``noise`` and, with realism models on, ``u`` (the generator's stream is that of its
+    calls with a size), so the draws allocate no array. ``sense`` is :func:`reading_group`."""
+    geometry, goal, plates, buffers, encoding, realism, noise, out, codes, flags, u = sense
+    real_on, gaussian, n_raw, n_draws = flags[0] == 1, flags[1] == 1, flags[2], flags[3]
+    if real_on:
+        if gaussian:
+            for i in range(n_raw):
+                noise[i] = rng.standard_normal()
+            for i in range(n_draws):
+                u[i] = rng.random()
+        else:
+            for i in range(n_raw + n_draws):
+                u[i] = rng.random()
+        return sense_realism(x, y, h, geometry, goal, plates, buffers, noise, u, not gaussian,
+                             realism, encoding, out, codes)  # fmt: skip
+    sense_one_inline(x, y, h, geometry, goal, plates, buffers)
+    if gaussian:
+        for i in range(n_raw):
+            noise[i] = rng.standard_normal()
+    else:
+        for i in range(n_raw):
+            noise[i] = rng.uniform(-1.0, 1.0)
+    return readout_inline(buffers[0], noise, encoding, out, buffers[2], codes)
+
+
+class ReadingArrays:
+    """The reading inputs of N sensor suites of one configuration, a row per robot
+    (module doc): ``shared`` and ``rows`` are :func:`robot_group`'s arguments."""
+
+    def __init__(self, suites: list) -> None:
+        k = suites[0].kernel
+        n = len(suites)
+        real = suites[0].realism
+        g = k.geometry
+        self.shared = (g[0], g[1], g[3], g[4], g[5], k.encoding, real.neighbours)
+        """Shared by every robot: ray offsets and units, camera directions, markers, walls;
+        the read-out's group; the sonars' neighbours."""
+        n_plates = len(suites[0].plates)
+        self.n_plates = np.zeros(n, np.int64)
+        self.rows = (
+            np.zeros((n, len(k.params))),  # the geometry's params (incidence on or off)
+            np.zeros((n, 2)),  # goal
+            np.zeros((n, n_plates, 2)),  # the other plates (misread model)
+            self.n_plates,
+            np.zeros((n, *k.raw.shape)),
+            np.zeros((n, *k.rays.shape)),
+            np.zeros((n, *k.eow_k.shape), np.int64),
+            np.stack([k.trig] * n),
+            np.zeros((n, *k.ray_cos.shape)),
+            np.zeros((n, *k.decoy.shape)),
+            np.zeros((n, len(real.params))),
+            np.zeros((n, len(real.flags)), np.bool_),
+            np.zeros((n, *k.echo.shape), np.bool_),
+            np.zeros((n, *k.crossed.shape), np.bool_),
+            np.zeros((n, *k.missed.shape), np.bool_),
+            np.zeros((n, *k.misread.shape), np.bool_),
+            np.zeros((n, k.n_raw)),  # noise
+            np.zeros((n, *k.out.shape)),
+            np.zeros((n, *k.codes.shape), np.int64),
+            np.zeros((n, 4), np.int64),  # real on, gaussian, n_raw, n_draws
+            np.zeros((n, k.n_raw + real.n_draws)),  # the realism path's draws
+        )
+        """Per robot: :func:`robot_group`'s rows."""
+
+    def load(self, r: int, suite) -> None:
+        """Robot ``r``'s configuration from ``suite`` (after its reset: a
+        domain-randomization draw or a new goal may have changed it)."""
+        k, real = suite.kernel, suite.realism
+        rows = self.rows
+        rows[0][r] = k.params
+        rows[1][r] = k.goal
+        plates = k.plates
+        self.n_plates[r] = len(plates)
+        rows[2][r, : len(plates)] = plates
+        rows[10][r] = real.params
+        rows[11][r] = real.flags
+        rows[19][r] = (int(k.real_on), int(k.gaussian), k.n_raw, real.n_draws)
+        rows[7][r] = k.trig
+
+    def store(self, r: int, suite) -> None:
+        """Robot ``r``'s last reading into ``suite``'s buffers (its :meth:`last` then
+        reads it)."""
+        k, rows = suite.kernel, self.rows
+        for i, buf in ((4, k.raw), (5, k.rays), (6, k.eow_k), (7, k.trig), (8, k.ray_cos),
+                       (9, k.decoy), (12, k.echo), (13, k.crossed), (14, k.missed),
+                       (15, k.misread), (16, k.noise), (17, k.out), (18, k.codes)):  # fmt: skip
+            buf[...] = rows[i][r]
+        suite.forget_last()
+
+
+@numba.njit(cache=True, inline="always")
+def robot_group(r: int, shared: tuple, rows: tuple) -> tuple:
+    """Robot ``r``'s :func:`reading_group` (:class:`ReadingArrays`)."""
+    ray_offsets, ray_units, camera_dirs, markers, walls, encoding, neighbours = shared
+    (params, goal, plates, n_plates, raw, rays, eow_k, trig, ray_cos, decoy, rparams, rflags,
+     echo, crossed, missed, misread, noise, out, codes, flags, u) = rows  # fmt: skip
+    geometry = (ray_offsets, ray_units, params[r], camera_dirs, markers, walls)
+    buffers = (raw[r], rays[r], eow_k[r], trig[r], ray_cos[r], decoy[r])
+    realism = (rparams[r], rflags[r], neighbours, echo[r], crossed[r], missed[r], misread[r])
+    return (geometry, goal[r], plates[r, : n_plates[r]], buffers, encoding, realism, noise[r],
+            out[r], codes[r], flags[r], u[r])  # fmt: skip
