@@ -28,6 +28,7 @@ __version__ = "0.1.0"
 gym.register(
     id="koolio_pymunk/Hallway-v0",
     entry_point="koolio_pymunk.task.env:KoolioEnv",
+    vector_entry_point="koolio_pymunk.task.vector_env:KoolioVectorEnv",
     kwargs={"arena": "hallway"},
     # The default ``episode.max_steps`` (tests/task/test_env.py checks they agree); see the
     # KoolioEnv docstring for how the env's own cap and TimeLimit relate.

@@ -234,13 +234,12 @@ def _interrupt_after(monkeypatch, target, name: str, calls: int) -> None:
 
 @pytest.mark.parametrize("discard", [False, True])
 def test_ctrl_c_with_robots_keeps_every_finished_episode(work, capsys, monkeypatch, discard):
-    from koolio_pymunk.learning.fleet import _Run
+    from koolio_pymunk.learning import engine
+    from koolio_pymunk.learning.engine import Engine
 
-    from koolio_pymunk.learning import fleet
-
-    ticks = _Run._ticks
-    monkeypatch.setattr(fleet, "CHUNK", 1)  # one tick per compiled call
-    _interrupt_after(monkeypatch, _Run, "_ticks", 150)
+    advance = Engine.advance
+    monkeypatch.setattr(engine, "CHUNK", 4)  # a tick of the four robots per compiled call
+    _interrupt_after(monkeypatch, Engine, "advance", 150)
     flag = ["--discard-unfinished"] if discard else []
     code, _, _ = run_cli(capsys, *TRAIN, "--qtable", "m.qtable", "--log", "m.csv",
                          "--robots", "4", "--episodes", "100", *flag)  # fmt: skip
@@ -250,7 +249,7 @@ def test_ctrl_c_with_robots_keeps_every_finished_episode(work, capsys, monkeypat
     assert done == list(range(table.meta["episodes"])) and len(done) >= 4
     n = len(done)
     assert cut == ([] if discard else [n, n + 1, n + 2, n + 3])  # four numbers, not one
-    monkeypatch.setattr(_Run, "_ticks", ticks)
+    monkeypatch.setattr(Engine, "advance", advance)
     code, _, _ = run_cli(capsys, *TRAIN, "--qtable", "m.qtable", "--log", "m.csv",
                          "--robots", "4", "--episodes", "4")  # fmt: skip
     assert code == 0
@@ -261,14 +260,9 @@ def test_discard_takes_back_only_the_unfinished_writes():
     """The journal: a robot's writes are taken back newest first, unless another robot
     wrote over them since; rows only the discarded episodes created are dropped."""
     import numpy as np
-    from koolio_pymunk.learning.fleet_kernel import (
-        SharedTable,
-        new_journal,
-        undo_writes,
-        update_logged,
-    )
 
     from koolio_pymunk.learning.qtable import QTable
+    from koolio_pymunk.learning.table_kernel import SharedTable, new_journal, undo_writes, update
     from koolio_pymunk.store.keyword import KeywordLayout
 
     table = QTable(KeywordLayout((("A", 8),)), q_init=-1.0)
@@ -277,7 +271,7 @@ def test_discard_takes_back_only_the_unfinished_writes():
     journal = new_journal(2, 8)
 
     def write(robot, state, action, reward):
-        update_logged(sh.index, sh.args(), 0.5, 0.0, state, action, reward, 0, True, robot, journal)
+        update(sh.index, sh.args(), 0.5, 0.0, state, action, reward, 0, True, robot, journal)
 
     write(0, 1, 0, 10.0)  # robot 0 (kept): 5.0
     write(1, 1, 0, 20.0)  # robot 1 (discarded) over it: 12.5

@@ -83,7 +83,7 @@ def run_moves(moves: int, seed: int = 0, jobs: int = 2, generated: int = 4) -> l
 def _side(arena: str, world: str | None, overrides: dict, seed: int, robots: int, compiled: bool):
     """One side of :func:`compare_robots`: an env, a table, the robots' learners, the loop."""
     from koolio_pymunk.learning.algorithms import make_learner
-    from koolio_pymunk.learning.episodes import robots as make_robots
+    from koolio_pymunk.learning.engine import robots as make_robots
     from koolio_pymunk.learning.qtable import QTable
     from koolio_pymunk.store.config import load_config
     from koolio_pymunk.task.env import KoolioEnv

@@ -105,35 +105,31 @@ def learning_loop(
     config: str | None = None,
 ) -> dict:
     """The training loop of ``train`` without file I/O, for at least ``min_steps`` steps
-    (``compiled`` False: the Python episode loop; True: the compiled episode where the
-    configuration allows, as ``train``)."""
-    import numpy as np
-
+    (``compiled`` False: the Python loop; True: the step engine where the configuration
+    allows, as ``train``)."""
     from koolio_pymunk.learning.algorithms import make_learner
-    from koolio_pymunk.learning.episodes import Episodes
+    from koolio_pymunk.learning.engine import robots
     from koolio_pymunk.learning.qtable import QTable
 
-    env = make_env(backend, world=world, algorithm=algorithm, config=config)
-    table = QTable(env.layout, {}, env.config.learner.q_init)
-    agent = make_learner(table, env.config.learner, np.random.default_rng(seed))
-    env.reset(seed=0)
-    env.transition(0)  # compile / warm up
-    loop = Episodes(env, agent, seed, compiled=compiled)
-    if loop.compiled is not None:  # compile / warm up the episode kernel on a copy
-        warm = make_env(backend, world=world, algorithm=algorithm, config=config)
-        other = make_learner(QTable(warm.layout), warm.config.learner, None)
-        w = Episodes(warm, other, seed, compiled=True)
-        w.begin(0)
-        w.run()
+    def loop_of(env):
+        table = QTable(env.layout, {}, env.config.learner.q_init)
+        return robots(env, [make_learner(table, env.config.learner, None)], seed,
+                      compiled=compiled)  # fmt: skip
+
+    warm = loop_of(make_env(backend, world=world, algorithm=algorithm, config=config))
+    warm.begin(0, 0)  # compile / warm up the kernels on a copy
+    warm.advance()
+    loop = loop_of(make_env(backend, world=world, algorithm=algorithm, config=config))
     steps, e = 0, 0
     with Timer() as t:
         while steps < min_steps:
-            loop.begin(e)
-            steps += loop.run().steps
+            loop.begin(0, e)
+            loop.advance()
+            steps += loop.result(0).steps
             e += 1
     out = rates(steps, t)
     out["episodes"] = e
-    out["compiled"] = loop.compiled is not None
+    out["compiled"] = loop.python_reason is None
     return out
 
 
@@ -213,26 +209,35 @@ def irsim_row(steps: int, e2e: dict, folder: Path) -> dict | None:
     return out
 
 
-def many(robots: int, episodes: int, folder: Path) -> dict:
-    from koolio_pymunk.learning.fleet import train_many
-
+def many(
+    robots: int, episodes: int, folder: Path, config: str | None = None, world: str | None = None
+) -> dict:
+    """``koolio-pm train --robots N`` end to end (the table saved every N episodes, the
+    log): robot-steps per second."""
     from koolio_pymunk.learning.qtable import QTableStore
+    from koolio_pymunk.learning.training import train
+    from koolio_pymunk.store.config import load_config
+    from koolio_pymunk.task.env import KoolioEnv
 
-    env = make_env("fast")
-    warm = QTableStore(folder / "warm.qtable")
-    train_many(env, warm, 2, 0, None, robots=2, report=None)  # compile the batch kernels
+    def env():
+        return KoolioEnv("hallway", config=load_config(config, world=world))
+
+    tag = f"many-{config}-{world}".replace("/", "_")
+    warm = QTableStore(folder / f"{tag}-warm.qtable")
+    train(env(), warm, 2, 0, None, report=None, robots=2)  # compile the kernels
     with Timer() as t:
-        res = train_many(
-            env,
-            QTableStore(folder / "many.qtable"),
+        res = train(
+            env(),
+            QTableStore(folder / f"{tag}.qtable"),
             episodes,
             0,
-            folder / "many.csv",
-            robots=robots,
+            folder / f"{tag}.csv",
             report=None,
+            robots=robots,
         )
     out = rates(res.steps, t)
-    out.update(robots=robots, episodes=episodes, states=len(res.table))
+    out.update(robots=robots, episodes=episodes, states=len(res.table), config=config,
+               world=world)  # fmt: skip
     return out
 
 
@@ -311,12 +316,14 @@ def step_costs(poses: int, step_us: float, repeats: int = 3, world: str | None =
     judge, rescue check, the loop and Python between episodes."""
     import numba
     import numpy as np
-    from koolio_pymunk.learning.episode_kernel import CompiledEpisode, _act, _move, sense_reading
-    from koolio_pymunk.learning.fleet_kernel import SharedTable, update
 
     from koolio_pymunk.learning.algorithms import make_learner
     from koolio_pymunk.learning.episodes import Episodes
     from koolio_pymunk.learning.qtable import QTable
+    from koolio_pymunk.learning.table_kernel import SharedTable, choose, new_journal, update
+    from koolio_pymunk.sensing.reading_kernel import reading_group, sense_reading
+    from koolio_pymunk.world.segment_query import wall_array
+    from koolio_pymunk.world.swept_move import act
 
     @numba.njit
     def sensing(pts, hs, rng, sense, keys):
@@ -324,23 +331,22 @@ def step_costs(poses: int, step_us: float, repeats: int = 3, world: str | None =
             keys[i] = sense_reading(pts[i, 0], pts[i, 1], hs[i], rng, sense)[0]
 
     @numba.njit
-    def moving(pts, hs, actions, rng, world):
+    def moving(pts, hs, actions, rng, world, motion):
         s = 0.0
         for i in range(pts.shape[0]):
-            s += _move(actions[i], pts[i, 0], pts[i, 1], hs[i], rng, world)[0]
+            s += act(actions[i], pts[i, 0], pts[i, 1], hs[i], rng, world, motion)[0]
         return s
 
     @numba.njit
-    def learning(keys, rewards, arng, index, table):
+    def learning(keys, rewards, arng, index, table, journal):
         for i in range(keys.shape[0] - 1):
-            a = _act(keys[i], 0.15, arng, 5, index, table[0])[0]
-            update(index, table, 0.2, 0.9, keys[i], a, rewards[i], keys[i + 1], False)
+            a = choose(keys[i], 0.15, arng, 5, index, table[0])[0]
+            update(index, table, 0.2, 0.9, keys[i], a, rewards[i], keys[i + 1], False, 0,
+                   journal)  # fmt: skip
 
     env = make_env("fast", world=world)
     table = QTable(env.layout, {}, env.config.learner.q_init)
     agent = make_learner(table, env.config.learner, None)
-    ce = CompiledEpisode(env, agent)
-    sense, world = ce.sense_group(), ce.world_group()
     run = Episodes(env, agent, 0)  # record a learning run's steps (the Python loop)
     pts, hs, actions, episode = np.empty((poses, 2)), np.empty(poses), np.empty(poses, int), 0
     for i in range(poses):
@@ -351,6 +357,11 @@ def step_costs(poses: int, step_us: float, repeats: int = 3, world: str | None =
         pts[i], hs[i] = (x, y), h
         run.step()
         actions[i] = env.last_action
+    sense = reading_group(env.sensors)
+    world = (wall_array(env.world), env.world.radius, float(env.move_distance), float(env.turn_arc))
+    m = env.motion
+    motion = np.zeros(5) if m is None else np.array(
+        [1.0, m.drift, m.drift_sigma, m.slip_sigma, m.turn_sigma])  # fmt: skip
     rng = np.random.default_rng(0)
     rewards = rng.uniform(-10.0, 0.0, poses)
     keys = np.empty(poses, np.int64)
@@ -364,16 +375,16 @@ def step_costs(poses: int, step_us: float, repeats: int = 3, world: str | None =
         return round(1e6 * min(times) / poses, 3)
 
     sensing(pts[:1], hs[:1], rng, sense, keys[:1])
-    moving(pts[:1], hs[:1], actions[:1], rng, world)
+    moving(pts[:1], hs[:1], actions[:1], rng, world, motion)
 
     def learn() -> None:
         sh = SharedTable(QTable(env.layout, {}, env.config.learner.q_init), poses + 1)
-        learning(keys, rewards, np.random.default_rng(1), sh.index, sh.args())
+        learning(keys, rewards, np.random.default_rng(1), sh.index, sh.args(), new_journal(1, 0))
 
     out = {
         "poses": poses,
         "sense_us": best(lambda: sensing(pts, hs, rng, sense, keys)),
-        "move_us": best(lambda: moving(pts, hs, actions, rng, world)),
+        "move_us": best(lambda: moving(pts, hs, actions, rng, world, motion)),
     }
     out["act_learn_us"] = best(learn)
     out["step_us"] = round(step_us, 3)

@@ -60,7 +60,15 @@ from ..task.step_kernel import (
     rescue_check_inline,
     simulate_inline,
 )
-from .episodes import TRUNCATED, EpisodeResult, Robots, env_seed, realism_values
+from .episodes import (
+    TRAIN_STREAM,
+    TRUNCATED,
+    Agent,
+    EpisodeResult,
+    Robots,
+    env_seed,
+    realism_values,
+)
 from .qlambda import QLambda
 from .qlearning import QLearner
 from .table_kernel import (
@@ -396,3 +404,32 @@ class Engine(Robots):
             for i, a, v in zip(rows[:n].tolist(), acts[:n].tolist(), e[:n].tolist())
         }
         agent._expect = None if meta[1] < 0 else int(meta[1])
+
+
+def robots(
+    envs: list[KoolioEnv] | KoolioEnv,
+    agents: list[Agent],
+    seed: int,
+    stream: int = TRAIN_STREAM,
+    learn: bool = True,
+    epsilon: float | None = None,
+    compiled: bool = True,
+    journal: bool = False,
+) -> Robots:
+    """The episodes of ``len(agents)`` robots (``envs``: one per robot, or one env and
+    the batch is made of it and its siblings): on the compiled step engine
+    (:class:`~koolio_pymunk.learning.engine.Engine`) when ``compiled`` and it runs them,
+    else the Python loop (:class:`~.episodes.Robots`); its ``python_reason`` says why
+    the Python loop (None: the engine)."""
+    n = len(agents)
+    if isinstance(envs, KoolioEnv):
+        envs = [envs] + [envs.sibling() for _ in range(n - 1)]
+    reason = "not asked for" if not compiled else None
+    if reason is None:
+        reason = next((w for w in (why_not(e, a) for e, a in zip(envs, agents)) if w), None)
+    if reason is not None:
+        loop = Robots(envs, agents, seed, stream, learn, epsilon)
+    else:
+        loop = Engine(EnvBatch(envs), agents, seed, stream, learn, epsilon, journal)
+    loop.python_reason = reason
+    return loop

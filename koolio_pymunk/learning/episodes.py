@@ -140,8 +140,9 @@ class Episodes:
     replaces the schedule's value at every episode start (0: the greedy policy).
     :meth:`begin` starts an episode, :meth:`step` makes one step and returns the outcome
     when the episode ended (``None`` while it runs), :meth:`run` steps to the end,
-    :meth:`result` is the episode's log row. (:func:`robots` runs many episodes of one
-    robot or several on the compiled step engine, the same steps bit for bit.)
+    :meth:`result` is the episode's log row. (:func:`koolio_pymunk.learning.engine.robots`
+    runs many episodes of one robot or several on the compiled step engine, the same
+    steps bit for bit.)
     """
 
     def __init__(
@@ -305,37 +306,3 @@ class Robots:
     def discard(self, robots: list[int]) -> list[int]:
         """Taking back the unfinished episodes' writes needs the engine's journal."""
         raise ValueError("discard: the Python loop keeps no journal of the writes")
-
-
-def robots(
-    envs: list[KoolioEnv] | KoolioEnv,
-    agents: list[Agent],
-    seed: int,
-    stream: int = TRAIN_STREAM,
-    learn: bool = True,
-    epsilon: float | None = None,
-    compiled: bool = True,
-    journal: bool = False,
-) -> Robots:
-    """The episodes of ``len(agents)`` robots (``envs``: one per robot, or one env and
-    the batch is made of it and its siblings): on the compiled step engine
-    (:class:`~koolio_pymunk.learning.engine.Engine`) when ``compiled`` and it runs them,
-    else the Python loop (:class:`Robots`); :attr:`Robots.python_reason` says why the
-    Python loop (None: the engine)."""
-    n = len(agents)
-    if isinstance(envs, KoolioEnv):
-        envs = [envs] + [envs.sibling() for _ in range(n - 1)]
-    reason = "not asked for" if not compiled else None
-    if reason is None:
-        from .engine import why_not
-
-        reason = next((w for w in (why_not(e, a) for e, a in zip(envs, agents)) if w), None)
-    if reason is not None:
-        loop = Robots(envs, agents, seed, stream, learn, epsilon)
-    else:
-        from ..task.batch import EnvBatch
-        from .engine import Engine
-
-        loop = Engine(EnvBatch(envs), agents, seed, stream, learn, epsilon, journal)
-    loop.python_reason = reason
-    return loop

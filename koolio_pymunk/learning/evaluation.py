@@ -61,7 +61,6 @@ from ..store.locks import FileLock
 from ..task.env import KoolioEnv
 from ..world.arena import arena_record
 from .episodes import EVAL_STREAM, EpisodeResult
-from .episodes import robots as make_robots
 from .qlearning import QLearner
 from .qtable import QTable, QTableStore, sensor_signature
 
@@ -138,6 +137,8 @@ def evaluate(
     has its own seeds whichever robot plays it and the table is only read, so the scores
     are exactly those of one episode after another.
     """
+    from .engine import robots as make_robots  # numba: loaded when an evaluation starts
+
     options = {"goal": goal} if goal else None
     env.check_options(options)
     n = max(1, min(robots, episodes))

@@ -43,7 +43,6 @@ from ..task.env import KoolioEnv
 from ..world.arena import arena_path, arena_record, load_arena
 from .algorithms import attach, make_learner
 from .episodes import INTERRUPTED, TRAIN_STREAM, EpisodeResult, Robots
-from .episodes import robots as make_robots
 from .evaluation import DEFAULT_EVAL_EPISODES, Check, PeriodicCheck, check_not_best
 from .qtable import (
     QTable,
@@ -378,6 +377,8 @@ def train(
     several robots a check reads the table as it stands when that episode finishes (the
     other robots' episodes under way included).
     """
+    from .engine import robots as make_robots  # numba: loaded when a run starts
+
     n = max(1, min(robots, episodes)) if episodes > 0 else max(1, robots)
     cfg = env.config
     loop_reason = _python_reason(env, compiled)

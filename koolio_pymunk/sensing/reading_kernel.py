@@ -116,7 +116,8 @@ class ReadingArrays:
 
     def load(self, r: int, suite) -> None:
         """Robot ``r``'s configuration from ``suite`` (after its reset: a
-        domain-randomization draw or a new goal may have changed it)."""
+        domain-randomization draw or a new goal may have changed it), and its last
+        reading (:meth:`take`)."""
         k, real = suite.kernel, suite.realism
         rows = self.rows
         rows[0][r] = k.params
@@ -127,17 +128,27 @@ class ReadingArrays:
         rows[10][r] = real.params
         rows[11][r] = real.flags
         rows[19][r] = (int(k.real_on), int(k.gaussian), k.n_raw, real.n_draws)
-        rows[7][r] = k.trig
+        self.take(r, suite)
+
+    def take(self, r: int, suite) -> None:
+        """``suite``'s last reading (made in Python: a reset's) into robot ``r``'s rows."""
+        for i, buf in self._buffers(suite):
+            self.rows[i][r] = buf
 
     def store(self, r: int, suite) -> None:
         """Robot ``r``'s last reading into ``suite``'s buffers (its :meth:`last` then
         reads it)."""
-        k, rows = suite.kernel, self.rows
-        for i, buf in ((4, k.raw), (5, k.rays), (6, k.eow_k), (7, k.trig), (8, k.ray_cos),
-                       (9, k.decoy), (12, k.echo), (13, k.crossed), (14, k.missed),
-                       (15, k.misread), (16, k.noise), (17, k.out), (18, k.codes)):  # fmt: skip
-            buf[...] = rows[i][r]
+        for i, buf in self._buffers(suite):
+            buf[...] = self.rows[i][r]
         suite.forget_last()
+
+    @staticmethod
+    def _buffers(suite) -> tuple:
+        """The suite's reading buffers with their row's index."""
+        k = suite.kernel
+        return ((4, k.raw), (5, k.rays), (6, k.eow_k), (7, k.trig), (8, k.ray_cos),
+                (9, k.decoy), (12, k.echo), (13, k.crossed), (14, k.missed), (15, k.misread),
+                (16, k.noise), (17, k.out), (18, k.codes))  # fmt: skip
 
 
 @numba.njit(cache=True, inline="always")

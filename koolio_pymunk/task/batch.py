@@ -116,7 +116,6 @@ class EnvBatch:
         self.readings = ReadingArrays([env.sensors for env in envs])
         """The robots' reading inputs
         (:class:`~koolio_pymunk.sensing.reading_kernel.ReadingArrays`)."""
-        self._loaded_steps = [0] * n
         self.reading_args = (self.readings.shared, self.readings.rows)
         """:func:`~koolio_pymunk.sensing.reading_kernel.robot_group`'s arguments."""
         for r, env in enumerate(envs):
@@ -158,14 +157,12 @@ class EnvBatch:
         self.motion[r] = (0.0,) * 5 if m is None else (
             1.0, m.drift, m.drift_sigma, m.slip_sigma, m.turn_sigma)  # fmt: skip
         self.readings.load(r, env.sensors)
-        self._loaded_steps[r] = env.steps
 
     def store(self, r: int) -> None:
         """Write robot ``r``'s arrays back into ``envs[r]``: its pose, state, counters,
         memory and last reading are then what the Python steps would have left."""
         ints, floats = self.ints[r].tolist(), self.floats[r].tolist()
-        if ints[1] != self._loaded_steps[r]:  # the rows hold a reading newer than the env's
-            self.readings.store(r, self.envs[r].sensors)
+        self.readings.store(r, self.envs[r].sensors)
         self.envs[r].adopt(
             (floats[0], floats[1], floats[2]),
             ints[0],

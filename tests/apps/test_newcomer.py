@@ -20,7 +20,7 @@ os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
 
 from koolio_pymunk.apps import cli
 from koolio_pymunk.learning.qtable import QTableStore, load_qtable, sensor_signature
-from koolio_pymunk.store.config import PROFILE_DIR
+from koolio_pymunk.store.config import PROFILE_DIR, load_config
 from koolio_pymunk.task.env import KoolioEnv
 from koolio_pymunk.world.arena import arena_record
 from tests.inputs import expect_error, header_of
@@ -321,15 +321,18 @@ def test_a_cold_cache_is_told_from_numba_s_own_index() -> None:
     assert cli._cached(ray_kernel.sense_one) and not cli.kernels_to_compile(env)
 
 
-def test_the_compiled_episode_counts_for_train_only(monkeypatch) -> None:
-    """``train`` with one robot also compiles the episode kernel: its cache is asked."""
-    from koolio_pymunk.learning import episode_kernel
+def test_the_step_engine_counts_where_it_runs(monkeypatch) -> None:
+    """``train`` and ``eval`` step on the engine: its cache is asked, unless the run steps
+    in Python (the pymunk reference compiles nothing)."""
+    from koolio_pymunk.learning import engine
 
     env = KoolioEnv("room")
     env.reset(seed=0)
-    cold = {episode_kernel.run_steps}
+    cold = {engine.run}
     monkeypatch.setattr(cli, "_cached", lambda dispatcher: dispatcher not in cold)
-    assert cli.kernels_to_compile(env, training=True) and not cli.kernels_to_compile(env)
+    assert cli.kernels_to_compile(env, training=True) and cli.kernels_to_compile(env)
+    reference = KoolioEnv("room", config=load_config(overrides={"sensors": {"backend": "pymunk"}}))
+    assert not cli.kernels_to_compile(reference, training=True)
 
 
 # -- 5. flags: whole words only, and a did-you-mean ------------------------------------------

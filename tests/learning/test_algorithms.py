@@ -248,18 +248,32 @@ def test_algorithm_mismatch_on_resume_is_refused_and_init_qtable_converts(tmp_pa
     assert table.meta["episodes"] == 4
 
 
-def test_many_robots_refuse_other_algorithms(tmp_path, capsys) -> None:
+@pytest.mark.parametrize("algorithm", ["qlambda", "dyna"])
+def test_many_robots_learn_with_every_algorithm(tmp_path, capsys, algorithm) -> None:
+    """Q(lambda) on the step engine, Dyna-Q on the Python loop (its model is Python's):
+    several robots learn with either (``--verbose`` says where Dyna-Q stepped)."""
     cfg = tmp_path / "c.yaml"
-    cfg.write_text("learner: {algorithm: qlambda}\n")
+    cfg.write_text(f"learner: {{algorithm: {algorithm}}}\n")
+    q = tmp_path / "t.qtable"
+    argv = ["train", "--arena", "room", "--config", str(cfg), "--robots", "2", "--episodes", "3"]
+    assert main([*argv, "--qtable", str(q), "--verbose"]) == 0
+    out = capsys.readouterr().out
+    assert load_qtable(q).meta["algorithm"]["name"] == algorithm
+    python = "stepped in the Python loop: learner.algorithm dyna" in out
+    assert python == (algorithm == "dyna")
+
+
+def test_discarding_with_robots_in_the_python_loop_is_refused(tmp_path, capsys) -> None:
+    """Exit Without Save with several robots takes their writes back from the engine's
+    journal: a Dyna-Q run (the Python loop) is refused in one line, before any file."""
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("learner: {algorithm: dyna}\n")
     q = tmp_path / "t.qtable"
     argv = ["train", "--arena", "room", "--config", str(cfg), "--robots", "2"]
-    assert main([*argv, "--qtable", str(q), "--quiet"]) == 2
+    assert main([*argv, "--qtable", str(q), "--discard-unfinished"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert err == [
-        "koolio-pm: error: --robots 2: learner.algorithm: qlambda learns with one robot only: "
-        "the compiled many-robot loop (fleet_kernel) has one-step Q only (use --robots 1)"
-    ]
-    assert not q.exists()
+    assert len(err) == 1 and err[0].startswith("koolio-pm: error: --discard-unfinished: ")
+    assert "learner.algorithm dyna" in err[0] and not list(tmp_path.glob("t.*"))
 
 
 # -- the robot runtime's standard-library copies ----------------------------------------------

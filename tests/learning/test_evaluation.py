@@ -384,7 +384,6 @@ def test_a_best_table_of_another_layout_is_refused(tmp_path) -> None:
         (["--eval-every", "9" * 23], "--eval-every: must be in 1..1,000,000,000, got 9"),
         (["--eval-every", "2", "--eval-episodes", "0"], "--eval-episodes: must be in 1..1,"),
         (["--eval-episodes", "5"], "--eval-episodes: only with --eval-every N"),
-        (["--eval-every", "2", "--robots", "2"], "--eval-every: not with --robots N"),
     ],
 )
 def test_bad_flags_one_line_exit_2(tmp_path, capsys, flags, message) -> None:

@@ -10,7 +10,13 @@ from koolio_pymunk.apps.cli import main
 from koolio_pymunk.apps.export import policy_document
 from koolio_pymunk.learning.episodes import Episodes
 from koolio_pymunk.learning.qlearning import QLearner
-from koolio_pymunk.learning.qtable import QTable, QTableStore, check_compatible, sensor_signature
+from koolio_pymunk.learning.qtable import (
+    QTable,
+    QTableStore,
+    check_compatible,
+    load_qtable,
+    sensor_signature,
+)
 from koolio_pymunk.learning.training import train
 from koolio_pymunk.sensing.memory import Memory
 from koolio_pymunk.store.config import Config, MemoryConfig, load_config
@@ -149,15 +155,16 @@ def test_bad_memory_options_are_one_line(tmp_path, capsys, memory, message) -> N
     assert not table.exists()
 
 
-def test_many_robots_refuse_memory_in_one_line(tmp_path, capsys) -> None:
+def test_many_robots_learn_with_a_memory(tmp_path, capsys) -> None:
+    """The step engine runs the memory for any number of robots (it was refused before
+    the engine): the table's states carry the memory's codes."""
     cfg = tmp_path / "m.yaml"
     cfg.write_text("sensors: {memory: {previous_action: true}}\n")
-    args = ["train", "--arena", "room", "--config", str(cfg), "--robots", "2", "--episodes", "2"]
-    assert main([*args, "--qtable", str(tmp_path / "t.qtable")]) == 2
-    out, err = capsys.readouterr()
-    assert "sensors.memory" in err and err.count("\n") == 1
-    assert out == ""  # refused before the opening line: the error is the only line
-    assert not list(tmp_path.glob("t.*"))
+    args = ["train", "--arena", "room", "--config", str(cfg), "--robots", "2", "--episodes", "4"]
+    assert main([*args, "--qtable", str(tmp_path / "t.qtable"), "--quiet"]) == 0
+    table = load_qtable(tmp_path / "t.qtable")
+    assert table.meta["episodes"] == 4
+    assert {key & 0b111 for key in table.rows} - {0} != set()  # the last action in the key
 
 
 @pytest.mark.parametrize("bearing", [False, True])

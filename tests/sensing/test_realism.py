@@ -27,7 +27,7 @@ from koolio_pymunk.sensing.realism_kernel import apply_realism
 from koolio_pymunk.sensing.suite import SensorSuite
 from koolio_pymunk.store.config import Config, SensorConfig, load_config
 from koolio_pymunk.store.episode_log import LOG_FIELDS
-from koolio_pymunk.store.errors import ConfigError, KoolioError
+from koolio_pymunk.store.errors import ConfigError
 from koolio_pymunk.store.realism_config import MotionRealism, RealismConfig
 from koolio_pymunk.task.env import KoolioEnv
 from koolio_pymunk.world.arena import load_arena
@@ -465,16 +465,15 @@ def test_compass_noise_is_an_angle() -> None:
             assert got == pytest.approx(want, abs=1e-9) and 0.0 <= got < 256.0
 
 
-def test_many_robots_refuse_realism_with_one_line(tmp_path, capsys) -> None:
-    from koolio_pymunk.learning.fleet import train_many
-
-    env = KoolioEnv("room", world="koolio-real")
-    with pytest.raises(KoolioError, match=r"^--robots: the many-robot loop runs the ideal"):
-        train_many(env, QTableStore(tmp_path / "m.qtable"), 2, 0, None, robots=2, report=None)
-    args = ["train", "--arena", "room", "--episodes", "1", "--robots", "2", "--quiet"]
+def test_many_robots_learn_in_a_realistic_world(tmp_path, capsys) -> None:
+    """The step engine runs every realism model and domain randomization for any number
+    of robots (refused before the engine): each row carries its episode's draw."""
+    args = ["train", "--arena", "room", "--episodes", "4", "--robots", "2", "--quiet"]
     args += ["--qtable", str(tmp_path / "t.qtable"), "--log", str(tmp_path / "t.csv")]
-    assert main([*args, "--world", "koolio-real"]) == 2
-    assert len(capsys.readouterr().err.strip().splitlines()) == 1
+    assert main([*args, "--world", "koolio-real-dr"]) == 0
+    rows = list(csv.DictReader((tmp_path / "t.csv").open()))
+    draws = {r["realism.motion.slip_sigma"] for r in rows}
+    assert len(rows) == 4 and len(draws) == 4
 
 
 @pytest.mark.parametrize(

@@ -10,6 +10,7 @@ os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
 
 import gymnasium as gym
 import numpy as np
+import pytest
 
 import koolio_pymunk  # noqa: F401  (registers koolio_pymunk/Hallway-v0)
 from koolio_pymunk.task.rules import TERMS
@@ -107,7 +108,7 @@ def _single_with_autoreset(seed: int, env: int) -> list[tuple]:
 
 def test_vector_envs_survive_staggered_autoresets():
     expected = [_single_with_autoreset(s, i) for i, s in enumerate(STAGGER_SEEDS)]
-    for mode in ("sync", "async"):
+    for mode in ("sync", "async", "vector_entry_point"):
         venv = gym.make_vec(ENV_ID, num_envs=4, vectorization_mode=mode, max_steps=STAGGER_CAP)
         try:
             venv.reset(seed=STAGGER_SEEDS, options={"heading": math.pi})
@@ -117,7 +118,7 @@ def test_vector_envs_survive_staggered_autoresets():
                 obs, reward, term, trunc, info = venv.step(actions)
                 assert info["keyword"].dtype == np.int64 and info["steps"].dtype == np.int64
                 assert all(isinstance(e, str) for e in info["event"])
-                assert all(isinstance(p, tuple) and len(p) == 3 for p in info["pose"])
+                assert all(len(p) == 3 for p in info["pose"])
                 terms = {k for k in info["reward_terms"] if not k.startswith("_")}
                 assert terms == set(TERMS)
                 assert all(info["reward_terms"][k].dtype == np.float64 for k in terms)
@@ -155,5 +156,119 @@ def test_rgb_array_render_returns_the_viewers_picture():
         venv.reset(seed=[0, 1])
         frames = venv.render()
         assert len(frames) == 2 and all(f.shape == first.shape for f in frames)
+    finally:
+        venv.close()
+
+
+# -- the native vector env: one compiled call per step ---------------------------------------
+
+
+def test_make_vec_gives_the_compiled_vector_env_by_default():
+    from koolio_pymunk.task.vector_env import KoolioVectorEnv
+
+    for mode, kind in ((None, KoolioVectorEnv), ("sync", gym.vector.SyncVectorEnv),
+                       ("async", gym.vector.AsyncVectorEnv)):  # fmt: skip
+        venv = gym.make_vec(ENV_ID, num_envs=3, vectorization_mode=mode)
+        try:
+            assert type(venv.unwrapped) is kind and venv.num_envs == 3
+            assert venv.metadata["autoreset_mode"] == gym.vector.AutoresetMode.NEXT_STEP
+            assert venv.single_observation_space == gym.make(ENV_ID).observation_space
+        finally:
+            venv.close()
+
+
+def _rollout(mode: str, n: int, seed, steps: int, **kw):
+    venv = gym.make_vec(ENV_ID, num_envs=n, vectorization_mode=mode, **kw)
+    try:
+        obs, info = venv.reset(seed=seed)
+        rng = np.random.default_rng(1)
+        out = [(obs, None, None, None, info)]
+        for _ in range(steps):
+            forward = rng.random(n) < 0.6  # mostly forward: walls, bumps, ends of the world
+            actions = np.where(forward, 3, rng.integers(0, 5, n))
+            out.append(venv.step(actions))
+        return out
+    finally:
+        venv.close()
+
+
+def _same(a, b) -> None:
+    """Two steps' results equal: arrays exactly, ``info`` key by key (the native env's
+    numbers as arrays where ``SyncVectorEnv`` holds tuples and lists)."""
+    for x, y in zip(a[:4], b[:4]):
+        if x is not None:
+            np.testing.assert_array_equal(x, y)
+    ia, ib = a[4], b[4]
+    assert sorted(ia) == sorted(ib)
+    for key in ia:
+        if key == "reward_terms":
+            for t in ia[key]:
+                np.testing.assert_array_equal(ia[key][t], ib[key][t])
+        elif ia[key].dtype == object and not isinstance(ia[key][0], str):
+            np.testing.assert_array_equal(np.array(list(ia[key]), float), ib[key])
+        else:
+            np.testing.assert_array_equal(ia[key], ib[key])
+
+
+@pytest.mark.parametrize(
+    ("seed", "kw"),
+    [
+        (11, {"max_steps": 120}),
+        ([3, 1, 4, 1, 5, 9, 2, 6], {"world": "koolio-real-dr", "max_episode_steps": 70}),
+        (0, {"config": "paper-memory-qlambda", "goal": "random"}),
+    ],
+)
+def test_the_compiled_vector_env_is_sync_of_gym_make(seed, kw):
+    """The same observations, rewards, terminations, truncations and info as
+    ``SyncVectorEnv`` of ``gym.make`` envs with the same seeds, through staggered
+    autoresets, rescues and both caps (the env's own and ``TimeLimit``'s)."""
+    rescue = {"rescue": {"max_steps_before_rescue": 4, "rescue_chance": 0.5}}
+    from koolio_pymunk.store.config import load_config
+
+    cfg = load_config(kw.pop("config", None), overrides=rescue)
+    sync = _rollout("sync", 8, seed, 300, config=cfg, **kw)
+    native = _rollout("vector_entry_point", 8, seed, 300, config=cfg, **kw)
+    for a, b in zip(sync, native):
+        _same(a, b)
+    steps = sync[1:]
+    ends = sum(int(s[2].sum() + s[3].sum()) for s in steps)
+    rescued = sum(int(s[4]["rescued"].sum()) for s in steps)
+    assert ends >= 8 and rescued >= 4  # the premise: autoresets and rescues happened
+
+
+def test_reset_mask_resets_only_the_masked_envs():
+    venv = gym.make_vec(ENV_ID, num_envs=3)
+    try:
+        venv.reset(seed=4)
+        for _ in range(5):
+            venv.step(np.array([3, 3, 3]))
+        _, info = venv.reset(options={"reset_mask": np.array([False, True, False])})
+        assert info["_steps"].tolist() == [False, True, False]
+        assert info["steps"][1] == 0 and info["steps"][0] == 5 and info["steps"][2] == 5
+        with pytest.raises(ValueError, match="reset_mask"):
+            venv.reset(options={"reset_mask": [True, False, True]})
+    finally:
+        venv.close()
+
+
+@pytest.mark.parametrize("actions", [[0, 5], [0.5, 1.0], [1, 2, 3], [-1, 0]])
+def test_bad_actions_are_refused_before_anything_moves(actions):
+    venv = gym.make_vec(ENV_ID, num_envs=2)
+    try:
+        obs, _ = venv.reset(seed=0)
+        with pytest.raises(ValueError, match="actions"):
+            venv.step(np.array(actions))
+        again, *_ = venv.step(np.array([0, 0]))
+        assert again.shape == obs.shape
+    finally:
+        venv.close()
+
+
+def test_the_compiled_vector_env_renders_each_env():
+    venv = gym.make_vec(ENV_ID, num_envs=2, render_mode="rgb_array")
+    try:
+        venv.reset(seed=[0, 1])
+        frames = venv.render()
+        assert len(frames) == 2 and frames[0].dtype == np.uint8 and frames[0].ndim == 3
     finally:
         venv.close()
