@@ -239,7 +239,7 @@ def test_ctrl_c_with_robots_keeps_every_finished_episode(work, capsys, monkeypat
 
     advance = Engine.advance
     monkeypatch.setattr(engine, "CHUNK", 4)  # a tick of the four robots per compiled call
-    _interrupt_after(monkeypatch, Engine, "advance", 150)
+    _interrupt_after(monkeypatch, Engine, "advance", 40)  # 40 episodes finish
     flag = ["--discard-unfinished"] if discard else []
     code, _, _ = run_cli(capsys, *TRAIN, "--qtable", "m.qtable", "--log", "m.csv",
                          "--robots", "4", "--episodes", "100", *flag)  # fmt: skip
