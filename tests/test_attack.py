@@ -64,7 +64,9 @@ def base(tmp_path_factory) -> Path:
     (folder / "tiny.yaml").write_text(TINY)
     args = ["--arena", "room", "--config", str(folder / "tiny.yaml"), "--quiet"]
     q, log = str(folder / "q.qtable"), str(folder / "q.csv")
-    assert cli.main(["train", *args, "--episodes", "3", "--qtable", q, "--log", log]) == 0
+    # the paper's saving: the backup is the previous episode's table (the torn-table tests)
+    train = ["train", *args, "--episodes", "3", "--qtable", q, "--log", log, "--fsync", "episode"]
+    assert cli.main(train) == 0
     assert cli.main(["export", "--qtable", q, "--out", str(folder / "p.json")]) == 0
     return folder
 
@@ -367,17 +369,28 @@ def _fail_call(monkeypatch, target, name: str, err: int, after: int = 0) -> None
     monkeypatch.setattr(target, name, failing)
 
 
-def test_disk_full_during_training_stops_with_the_last_good_table(work, capsys, monkeypatch):
+@pytest.mark.parametrize("mode", ["episode", "second"])
+def test_disk_full_during_training_stops_with_the_last_good_table(work, capsys, monkeypatch, mode):
+    """Disk full at a save: with the paper's saving at a table's fsync (2 a save: the file
+    and its folder), with the journal at an append (its write): one line, and the table
+    (with its journal) holds every episode logged."""
     good = load_qtable(work / "q.qtable").meta["episodes"]
-    _fail_call(monkeypatch, files_mod.os, "fsync", errno.ENOSPC, after=8)  # 1 a save (2 the first)
+    call = "fsync" if mode == "episode" else "write"
+    _fail_call(monkeypatch, files_mod.os, call, errno.ENOSPC, after=8)
     code, _, err = run_cli(capsys, *TRAIN, "--qtable", "q.qtable", "--log", "q.csv",
-                           "--episodes", "50")  # fmt: skip
-    monkeypatch.setattr(files_mod.os, "fsync", os.fsync)
-    assert code == 2 and err.count("\n") == 1
+                           "--episodes", "50", "--fsync", mode)  # fmt: skip
+    monkeypatch.undo()
+    assert code == 2 and err.count("\n") == 1, err
     assert "cannot write: disk full (no space left on device)" in err
     table = load_qtable(work / "q.qtable")
     assert good < table.meta["episodes"] < good + 50
-    assert load_qtable(work / "q.qtable.bak").meta["episodes"] == table.meta["episodes"] - 1
+    if mode == "episode":
+        assert load_qtable(work / "q.qtable.bak").meta["episodes"] == table.meta["episodes"] - 1
+    else:  # the snapshot as it was, and the journal's records after it
+        from koolio_pymunk.learning.qtable import QTable
+
+        snapshot = QTable.from_bytes((work / "q.qtable").read_bytes())
+        assert snapshot.meta["episodes"] == good and (work / "q.qtable.journal").exists()
     agree(work / "q.qtable", work / "q.csv")
     assert not [p for p in work.iterdir() if p.name.endswith(".tmp")]
 

@@ -209,9 +209,19 @@ def build_parser() -> argparse.ArgumentParser:
         type=int_type(1, MAX_EPISODES),
         default=None,
         metavar="K",
-        help="save the table (and its backup) every K finished episodes instead of after "
-        "each one (the paper's rule, the default with one robot; --robots N: N), and always "
-        "at the end, on Ctrl-C and on SIGTERM",
+        help="save the table every K finished episodes instead of after each one (the "
+        "default with one robot; --robots N: N), and always at the end, on Ctrl-C and on "
+        "SIGTERM",
+    )
+    p.add_argument(
+        "--fsync",
+        choices=("second", "episode"),
+        default="second",
+        help="how a save reaches the disk: 'second' (default) writes the table whole and "
+        "fsynced at most once a second, the end, Ctrl-C and SIGTERM, and each finished "
+        "episode's changes in between to its journal (a killed run loses no finished "
+        "episode, a power loss at most the last second); 'episode', the paper's rule, "
+        "writes and fsyncs it whole at every save",
     )
     p.add_argument(
         "--save-seconds",
@@ -440,6 +450,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         save_every=args.save_every,
         save_seconds=args.save_seconds,
         robots=args.robots,
+        fsync=args.fsync,
     )
     if args.verbose and result.python_reason is not None:
         say(f"stepped in the Python loop: {result.python_reason}")

@@ -45,7 +45,9 @@ from ..learning.qtable import (
     backup_path,
     check_compatible,
     sensor_signature,
+    with_journal,
 )
+from ..learning.table_journal import journal_path
 from ..store.config import Config, load_config, state_fields
 from ..store.errors import FileError, QTableError, located
 from ..store.files import atomic_write, check_path, read_bytes
@@ -343,8 +345,11 @@ def load_any_table(path: str | Path) -> QTable:
         data = read_bytes(p, max(MAX_TABLE_BYTES, rt.MAX_POLICY_BYTES), "Q-table or policy file")
     except FileError as exc:
         raise QTableError(str(exc)) from None
-    if data[: len(MAGIC)] == MAGIC:
-        return QTable.from_bytes(data, str(p))
+    if data[: len(MAGIC)] == MAGIC:  # with its journal, as every reader of a table
+        try:
+            return with_journal(QTable.from_bytes(data, str(p)), data, journal_path(p))
+        except FileError as exc:
+            raise QTableError(str(exc)) from None
     if data.lstrip()[:1] != b"{":
         raise QTableError(
             located(str(p), "", "neither a .qtable file nor a koolio-policy (JSON) file")

@@ -351,6 +351,10 @@ class Engine(Robots):
         """The shared table's changed rows into the Q-table (before a save or a check)."""
         self.shared.sync()
 
+    def changed_rows(self) -> tuple[np.ndarray, np.ndarray]:
+        """The keys and values of the table's rows written since the last call."""
+        return self.shared.changed()
+
     def sync(self) -> None:
         """The table, every env and every learner as the Python steps would have left
         them (the end of a run, a stop)."""

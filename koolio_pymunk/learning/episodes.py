@@ -300,6 +300,10 @@ class Robots:
     def sync_table(self) -> None:
         """The Q-table holds every update made (the Python learners write it directly)."""
 
+    #: The Python learners write the table's rows in place: their changes are not tracked
+    #: (a run's table is written whole between its durable snapshots).
+    changed_rows = None
+
     def sync(self) -> None:
         """The table, the envs and the learners hold the state reached (they do)."""
 

@@ -55,6 +55,7 @@ repeat episode numbers for ever. The store holds the table's lock
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import itertools
 import json
@@ -75,6 +76,8 @@ from ..store.errors import FileError, KoolioError, QTableError, located, shown
 from ..store.files import (
     atomic_link,
     atomic_write,
+    file_error,
+    fsync_dir,
     identity,
     read_bytes,
     remove_stale_temps,
@@ -82,6 +85,7 @@ from ..store.files import (
 )
 from ..store.keyword import MAX_ACTIONS, MAX_KEYWORD_BITS, MAX_LEVELS, KeywordLayout
 from ..store.locks import FileLock
+from . import table_journal
 from .dyna_model import SECTION, Model
 
 MAGIC = b"KOOLIOQT"
@@ -216,7 +220,7 @@ class QTable:
             raise bad("corrupt or truncated (length does not match the row count)")
         keys = np.frombuffer(data, dtype="<u8", count=n, offset=pos)
         values = np.frombuffer(data, dtype="<f8", count=n * na, offset=pos + 8 * n)
-        _check_rows(keys, values, layout, source)
+        check_rows(keys, values, layout, source)
         rows = {int(k): values[i * na : (i + 1) * na].tolist() for i, k in enumerate(keys)}
         pos += n * 8 * (1 + na)
         sections = {}
@@ -313,8 +317,10 @@ def _check_layout(data: Any, source: str) -> KeywordLayout:
     return layout
 
 
-def _check_rows(keys: np.ndarray, values: np.ndarray, layout: KeywordLayout, source: str) -> None:
-    """State keys ascending and within the layout's bits; every Q value finite."""
+def check_rows(keys: np.ndarray, values: np.ndarray, layout: KeywordLayout, source: str) -> None:
+    """Refuse rows that are not rows of ``layout``'s table, in one line naming
+    ``source``: state keys ascending and within the layout's bits and levels, every Q
+    value finite and within bounds."""
     if len(keys) == 0:
         return
     if len(keys) > 1 and not bool(np.all(keys[1:] > keys[:-1])):
@@ -357,24 +363,47 @@ def backup_path(path: Path) -> Path:
 
 
 class QTableStore:
-    """A Q-table file and its backup (``<file>.bak``), as the paper keeps them.
+    """A Q-table file, its backup (``<file>.bak``) and its journal (``<file>.journal``).
 
     :meth:`open` locks the table (one writer at a time), reads it (creating both files
-    empty when missing); :meth:`save` writes the new table, makes the previous good one
-    the backup, then puts the new one in place, each step atomic and one fsync in all;
-    :meth:`close` releases the lock. ``open`` is :meth:`load` then, for a new table,
-    :meth:`create`: a caller that must check something before any file is written (the
-    training log) calls them itself.
+    empty when missing); :meth:`save` writes the whole table (a *snapshot*), :meth:`append`
+    adds the rows one episode changed to the journal
+    (:mod:`~koolio_pymunk.learning.table_journal`); :meth:`close` releases the lock.
+    ``open`` is :meth:`load` then, for a new table, :meth:`create`: a caller that must
+    check something before any file is written (the training log) calls them itself.
+
+    **The two ways of keeping a table** (``fsync``; ``koolio-pm train --fsync``,
+    docs/robustness.md):
+
+    * ``episode`` (the paper's rule): every save is a snapshot, written, fsynced and put
+      in place atomically; the previous good table becomes the backup;
+    * ``second``: snapshots are written durably (fsynced, the folder too) when the caller
+      asks (at most once a second, at the end, on Ctrl-C and SIGTERM: ``RunFiles``), and
+      the backup is then the same durable file; the episodes between two snapshots go to
+      the journal (:meth:`append`: written, not fsynced), or, for a table whose changes
+      are not tracked, to a snapshot that is not fsynced (``save(durable=False)``,
+      the backup untouched). A killed process loses no finished episode either way; a
+      power loss at most the last second, and the table still loads (the backup, or the
+      snapshot and its journal's whole records).
     """
 
-    def __init__(self, path: str | Path, warn=None, purpose: str = "koolio-pm") -> None:
+    def __init__(
+        self, path: str | Path, warn=None, purpose: str = "koolio-pm", fsync: str = "episode"
+    ) -> None:
+        if fsync not in FSYNC_MODES:
+            raise ValueError(f"fsync: one of {', '.join(FSYNC_MODES)}, got {fsync!r}")
         self.path = Path(path)
         self.backup = backup_path(self.path)
+        self.journal = table_journal.journal_path(self.path)
+        self.fsync = fsync
+        """``episode`` or ``second`` (class doc)."""
         self._warn = warn or (lambda msg: print(f"warning: {msg}", file=sys.stderr))
         self._last: bytes | None = None
+        """The bytes of the table file as last read or written (its snapshot)."""
         self._written: tuple[int, int, int, int] | None = None
         """:func:`~koolio_pymunk.store.files.identity` of the table file this store wrote
         last (None: none yet)."""
+        self._journal_fd: int | None = None
         self._lock = FileLock(self.path, purpose)
         self.fresh = False
         """True when :meth:`load` found no table (a new one starts at episode 0)."""
@@ -409,7 +438,7 @@ class QTableStore:
         if self._lock.held:
             return
         self._lock.acquire()
-        for p in (self.path, self.backup):
+        for p in (self.path, self.backup, self.journal):
             remove_stale_temps(p, owned=True)
 
     def load(
@@ -460,26 +489,94 @@ class QTableStore:
         return self.path.exists() or self.backup.exists()
 
     def create(self, table: QTable) -> None:
-        """Write a new table to the file and the backup."""
+        """Write a new table to the file and the backup (durably, in either mode)."""
         self.lock()
+        self._close_journal()
         self._last = table.to_bytes()
         with staged_write(self.path, self._last) as written:
             pass
         self._written = identity(written)
         self._keep_backup()
+        self._drop_journal()
+        fsync_dir(self.path.parent)
         self.fresh = False
         self.created = True
 
-    def save(self, table: QTable) -> None:
-        """Write ``table``: the previous good table becomes the backup once the new one is
-        on disk, before it replaces the file (:meth:`_keep_backup`)."""
+    def save(self, table: QTable, durable: bool = True) -> None:
+        """Write ``table`` whole (a snapshot) and start its journal afresh. ``episode``
+        mode: fsynced, the previous good table becomes the backup once the new one is on
+        disk, before it replaces the file (:meth:`_keep_backup`). ``second`` mode:
+        ``durable`` writes it fsynced (its folder too) and makes that file the backup as
+        well; otherwise it is put in place unsynced and the backup (the last durable
+        snapshot) is left alone (class doc)."""
         self.lock()
         data = table.to_bytes()
-        with staged_write(self.path, data) as written:
-            if self._last is not None and self._last != data:
-                self._keep_backup()
+        self._close_journal()
+        if self.fsync == "episode":
+            with staged_write(self.path, data) as written:
+                if self._last is not None and self._last != data:
+                    self._keep_backup()
+        else:
+            with staged_write(self.path, data, durable=durable) as written:
+                pass
         self._written = identity(written)
         self._last = data
+        if self.fsync != "episode" and durable:
+            self._keep_backup()
+        self._drop_journal()
+        if durable:
+            fsync_dir(self.path.parent)
+
+    def append(self, table: QTable, keys: np.ndarray, values: np.ndarray) -> None:
+        """Add a journal record: rows ``keys`` hold ``values`` (the rows an episode
+        changed) and the table ``table.meta["episodes"]`` episodes. Written, not fsynced:
+        a killed process loses nothing (module :mod:`~koolio_pymunk.learning.table_journal`).
+        The table file must hold the snapshot the journal continues (a :meth:`save` or a
+        :meth:`load` since)."""
+        self.lock()
+        if self._last is None:
+            raise ValueError("append: no snapshot yet (save or load the table first)")
+        rec = table_journal.record(int(table.meta.get("episodes", 0)), keys, values)
+        try:
+            if self._journal_fd is None:
+                self._journal_fd = self._open_journal()
+            os.write(self._journal_fd, rec)
+        except OSError as exc:
+            self._close_journal()
+            raise file_error(self.journal, "write", exc) from None
+
+    def _open_journal(self) -> int:
+        """The journal opened for appending: the one on disk when it continues the table
+        file (cut back to its whole records), else a new one."""
+        head = table_journal.header(self._last)  # type: ignore[arg-type]
+        try:
+            data = self.journal.read_bytes()
+        except OSError:
+            data = b""
+        if table_journal.continues(data, self._last):  # type: ignore[arg-type]
+            fd = os.open(self.journal, os.O_WRONLY)
+            os.ftruncate(fd, table_journal.good_length(data))
+            os.lseek(fd, 0, os.SEEK_END)
+            return fd
+        atomic_write(self.journal, head)
+        fd = os.open(self.journal, os.O_WRONLY)
+        os.lseek(fd, 0, os.SEEK_END)
+        return fd
+
+    def _close_journal(self) -> None:
+        if self._journal_fd is not None:
+            with contextlib.suppress(OSError):
+                os.close(self._journal_fd)
+            self._journal_fd = None
+
+    def _drop_journal(self) -> None:
+        """Remove the journal: the table file holds everything now."""
+        try:
+            os.unlink(self.journal)
+        except FileNotFoundError:
+            pass
+        except OSError as exc:
+            raise file_error(self.journal, "remove", exc) from None
 
     def _keep_backup(self) -> None:
         """Make the backup hold the previous good table (``_last``): the table file itself
@@ -496,6 +593,7 @@ class QTableStore:
     def close(self) -> None:
         """Release the lock (the files stay as last saved). The session that created the
         table ends here: opened again, it is a table to resume like any other."""
+        self._close_journal()
         self._lock.release()
         self.created = False
 
@@ -517,9 +615,11 @@ class QTableStore:
             try:
                 table = QTable.from_bytes(data, str(self.path))
                 self._last = data
-                return table
             except QTableError as exc:
                 main_err = exc
+            else:
+                with_journal(table, data, self.journal, self._warn)
+                return table
         if self.backup.exists():
             try:
                 data = _read_table(self.backup)
@@ -540,6 +640,35 @@ class QTableStore:
         return None
 
 
+#: ``QTableStore``'s ways of keeping a table (its class doc).
+FSYNC_MODES = ("episode", "second")
+
+
+def with_journal(table: QTable, data: bytes, path: Path, warn=None) -> QTable:
+    """``table`` (read from the snapshot ``data``) with the journal at ``path`` replayed
+    (:mod:`~koolio_pymunk.learning.table_journal`); a journal cut short is used up to its
+    last whole record, with a warning."""
+    try:
+        journal = read_bytes(path, MAX_TABLE_BYTES, "journal")
+    except FileError:
+        if path.exists():
+            raise
+        return table
+    found = table_journal.records(journal, data, table.layout.n_actions, str(path))
+    rows = table.rows
+    for k, (episodes, keys, values) in enumerate(found.records, start=1):
+        check_rows(keys, values.reshape(-1), table.layout, f"{path}: record {k}")
+        for key, row in zip(keys.tolist(), values.tolist()):
+            rows[key] = row
+        table.meta["episodes"] = episodes
+    if found.torn and warn is not None:
+        warn(
+            f"{path}: its last record is cut short (a run killed while writing it, or a "
+            f"power loss): the {len(found.records)} records before it are used"
+        )
+    return table
+
+
 def _read_table(path: Path) -> bytes:
     """A table file's bytes (a regular file of at most :data:`MAX_TABLE_BYTES`; a FIFO
     or a device is refused before it is opened for reading:
@@ -548,13 +677,17 @@ def _read_table(path: Path) -> bytes:
 
 
 def load_qtable(path: str | Path) -> QTable:
-    """Read a table file (no backup fallback); QTableError when missing or bad."""
+    """Read a table file and its journal (no backup fallback); QTableError when missing
+    or bad."""
     p = Path(path)
     try:
         data = _read_table(p)
     except FileError as exc:
         raise QTableError(str(exc)) from None
-    return QTable.from_bytes(data, str(p))
+    try:
+        return with_journal(QTable.from_bytes(data, str(p)), data, table_journal.journal_path(p))
+    except FileError as exc:
+        raise QTableError(str(exc)) from None
 
 
 _warned: set[tuple[str, str, str]] = set()

@@ -2,10 +2,14 @@
 
 :class:`SharedTable` mirrors a :class:`~koolio_pymunk.learning.qtable.QTable` in arrays a
 compiled loop can use: a typed dict from state key to row, a ``(capacity, n_actions)``
-array of values and a dirty flag per row; :meth:`SharedTable.sync` writes the dirty rows
-back into the ``QTable`` (before every save and every check). The kernels, each the
-compiled twin of the Python code it names (same float64 operations in the same order, the
-same draws from the same generators):
+array of values and, per row, the *era* of its last write (``stamp``: the value of
+``count[1]`` when a kernel wrote it; Python starts a new era with :meth:`SharedTable.mark`).
+:meth:`SharedTable.sync` writes the rows written since its last call back into the
+``QTable`` (before every snapshot of the table and every check);
+:meth:`SharedTable.changed` gives the rows written since its own last call (a journal
+record of the table's file, :meth:`~koolio_pymunk.learning.qtable.QTableStore.append`).
+The kernels, each the compiled twin of the Python code it names (same float64 operations
+in the same order, the same draws from the same generators):
 
 * :func:`choose`: ``QLearner.act``'s epsilon-greedy choice with random tie-breaking and
   the no-undo rule (``learner.no_undo``, :mod:`~koolio_pymunk.learning.action_rules`);
@@ -49,8 +53,11 @@ class SharedTable:
         cap = max(reserve, 2 * n)
         self.q = np.empty((cap, self.n_actions))
         self.keys = np.empty(cap, np.int64)
-        self.dirty = np.zeros(cap, np.bool_)
-        self.count = np.array([n], np.int64)
+        self.dirty = np.zeros(cap, np.int64)
+        """Per row: the era of its last write (module doc)."""
+        self.count = np.array([n, 1], np.int64)
+        """The rows in use, and the current era."""
+        self._synced = self._changed = 1  # the first era either has not seen
         if n:
             self.keys[:n] = np.fromiter(table.rows, np.int64, n)
             self.q[:n] = np.array(list(table.rows.values()), dtype=np.float64)
@@ -71,23 +78,40 @@ class SharedTable:
         q[:n] = self.q[:n]
         keys = np.empty(new, np.int64)
         keys[:n] = self.keys[:n]
-        dirty = np.zeros(new, np.bool_)
+        dirty = np.zeros(new, np.int64)
         dirty[:n] = self.dirty[:n]
         self.q, self.keys, self.dirty = q, keys, dirty
+
+    def mark(self) -> int:
+        """Start a new era of writes; returns the era that ends."""
+        era = int(self.count[1])
+        self.count[1] = era + 1
+        return era
+
+    def _since(self, era: int) -> np.ndarray:
+        """The rows written in ``era`` or later."""
+        return np.flatnonzero(self.dirty[: int(self.count[0])] >= era)
 
     def sync(self) -> None:
         """Write the rows changed since the last sync into the QTable."""
         rows = self.table.rows
-        for i in np.flatnonzero(self.dirty[: int(self.count[0])]).tolist():
+        for i in self._since(self._synced).tolist():
             rows[int(self.keys[i])] = self.q[i].tolist()
-        self.dirty[:] = False
+        self._synced = self.mark() + 1
+
+    def changed(self) -> tuple[np.ndarray, np.ndarray]:
+        """The keys and values of the rows written since the last call (the first call:
+        since the table was mirrored)."""
+        idx = self._since(self._changed)
+        self._changed = self.mark() + 1
+        return self.keys[idx], self.q[idx]
 
     def row_of(self, key: int) -> int:
         """The row of state ``key`` (-1: none)."""
         return int(find_row(self.index, key))
 
     def args(self) -> tuple:
-        """The kernels' table group ``(q, keys, dirty, count, q_init)``; the typed dict
+        """The kernels' table group ``(q, keys, dirty (the stamps), count, q_init)``; the typed dict
         :attr:`index` goes beside it (a tuple holding a typed dict costs numba's slow
         argument typing at every call)."""
         return (self.q, self.keys, self.dirty, self.count, self.q_init)
@@ -122,7 +146,7 @@ def row_of(index, table: tuple, key: int) -> int:
         keys[i] = key
         for a in range(q.shape[1]):
             q[i, a] = q_init
-        dirty[i] = True
+        dirty[i] = count[1]
         count[0] += 1
     return i
 
@@ -188,7 +212,7 @@ def update(index, table: tuple, alpha: float, gamma: float, state: int, action: 
     old = q[i, action]
     target = td_target(index, table, gamma, reward, nxt, terminal)
     q[i, action] += alpha * (target - q[i, action])
-    dirty[i] = True
+    dirty[i] = count[1]
     _journal(journal, r, i, action, old, q[i, action], count[0] > before)
 
 
@@ -224,7 +248,7 @@ def lambda_update(
         row, a = t_row[k], t_act[k]
         old = q[row, a]
         q[row, a] += step * t_e[k]
-        dirty[row] = True
+        dirty[row] = count[1]
         _journal(journal, r, row, a, old, q[row, a], created and row == i)
         e = t_e[k] * decay
         if not e < cutoff:
@@ -252,7 +276,7 @@ def undo_writes(shared: SharedTable, journal: tuple, robots: list[int]) -> list[
         i, a = int(jint[r, k, 0]), int(jint[r, k, 1])
         if q[i, a] == jf[r, k, 1]:
             q[i, a] = jf[r, k, 0]
-            shared.dirty[i] = True
+            shared.dirty[i] = shared.count[1]
         if jint[r, k, 3]:
             created.append(i)
     return [int(shared.keys[i]) for i in created if bool(np.all(q[i] == shared.q_init))]

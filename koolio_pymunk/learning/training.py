@@ -53,6 +53,10 @@ from .qtable import (
     sensor_signature,
 )
 
+#: With ``--fsync second``: the longest time between two durable snapshots of the table
+#: (what a power loss can lose), seconds.
+CHECKPOINT_SECONDS = 1.0
+
 
 @dataclass
 class Progress:
@@ -174,11 +178,21 @@ class RunFiles:
         """Also save when this many seconds passed since the last save (None: never by
         time)."""
         self.before_save = before_save
-        self._saved_at = time.monotonic()
+        """Runs before each snapshot (the engine copies its compiled table into the
+        Q-table there)."""
+        self.changed_rows: Callable[[], tuple] | None = None
+        """The rows changed since its last call, as ``(keys, values)`` arrays (the
+        engine's): with ``--fsync second`` they go to the table's journal between two
+        snapshots. None: the changes are not tracked (the Python loop), and the table is
+        written whole, unsynced, between two durable snapshots."""
+        self._saved_at = self._durable_at = time.monotonic()
         self.first = int(table.meta.get("episodes", 0))
         """Episodes the table held when the run opened it."""
         self.unsaved = 0
         """Finished episodes recorded since the last save."""
+        self.undurable = 0
+        """Finished episodes saved (in the journal, or an unsynced snapshot) since the last
+        durable snapshot."""
 
     @classmethod
     def open(
@@ -270,16 +284,45 @@ class RunFiles:
         return table
 
     def finished(self, res: EpisodeResult, save: bool = False) -> None:
-        """Record finished episode ``res``: the table's count, a save when due (or
-        ``save``: now), the row."""
+        """Record finished episode ``res``: the table's count, the table kept when due
+        (:meth:`keep`; ``save``: a snapshot now), the row."""
         self.table.meta["episodes"] = res.episode + 1
         self.unsaved += 1
         late = self.save_seconds is not None and (
             time.monotonic() - self._saved_at >= self.save_seconds
         )
-        if save or late or self.unsaved >= self.save_every:
+        if save:
             self.save()
+        elif late or self.unsaved >= self.save_every:
+            self.keep()
         self.log.write(res)
+
+    def keep(self) -> None:
+        """The episodes finished since the last save into the table's files, as the
+        store's ``fsync`` mode keeps them (:class:`~koolio_pymunk.learning.qtable.QTableStore`):
+        ``episode``, a durable snapshot; ``second``, a durable snapshot when
+        :data:`CHECKPOINT_SECONDS` passed since the last one, else a journal record of
+        the rows changed (or, untracked, an unsynced snapshot)."""
+        now = time.monotonic()
+        if self.store.fsync == "episode" or now - self._durable_at >= CHECKPOINT_SECONDS:
+            self.save()
+            return
+        if self.changed_rows is not None:
+            keys, values = self.changed_rows()
+            self.store.append(self.table, keys, values)
+        else:
+            if self.before_save is not None:
+                self.before_save()
+            self.store.save(self.table, durable=False)
+        self.undurable += self.unsaved
+        self.unsaved = 0
+        self._saved_at = now
+
+    def checkpoint(self) -> None:
+        """A durable snapshot when anything finished since the last one (the end of a
+        run, or a stop between episodes)."""
+        if self.unsaved or self.undurable:
+            self.save()
 
     def folded(self, *results: EpisodeResult) -> None:
         """Record unfinished episodes whose updates stay in the table (Exit): the table
@@ -289,12 +332,15 @@ class RunFiles:
             self.log.write(res)
 
     def save(self) -> None:
-        """Write the table (and its backup) now."""
+        """Write the table whole and durably now (with its backup; its journal is then
+        empty): the end of a run, Ctrl-C, SIGTERM, a check, a checkpoint."""
         if self.before_save is not None:
             self.before_save()
+        if self.changed_rows is not None:
+            self.changed_rows()  # the snapshot holds them: the next record starts after
         self.store.save(self.table)
-        self.unsaved = 0
-        self._saved_at = time.monotonic()
+        self.unsaved = self.undurable = 0
+        self._saved_at = self._durable_at = time.monotonic()
 
     def close(self) -> None:
         """Release the log and the table (their locks)."""
@@ -336,6 +382,7 @@ def train(
     save_seconds: float | None = None,
     compiled: bool = True,
     robots: int = 1,
+    fsync: str = "second",
 ) -> TrainResult:
     """Train ``robots`` robots for ``episodes`` more episodes into one table (``koolio-pm
     train --episodes N`` is the total the table reaches: it passes N minus the episodes
@@ -371,6 +418,11 @@ def train(
     bit); False always runs the Python loop (the reference). :attr:`TrainResult.python_reason`
     says why a run stepped in Python.
 
+    ``fsync`` is how the table is kept (:class:`~koolio_pymunk.learning.qtable.QTableStore`):
+    ``second`` (the default) writes it whole and fsynced at most once a second (and at
+    the end, on Ctrl-C and SIGTERM) and each episode's changes in between to its journal;
+    ``episode``, the paper's rule, writes and fsyncs it whole at every save.
+
     ``eval_every`` N > 0: a greedy check of ``eval_episodes`` episodes each time the
     table's episode count reaches a multiple of N, and the best table kept
     (:mod:`koolio_pymunk.learning.evaluation`); the training itself is the same. With
@@ -391,6 +443,7 @@ def train(
                 f"journal, and this run steps in Python ({loop_reason})",
             )
         )
+    store.fsync = fsync
     checker = None
     if eval_every:
         checker = PeriodicCheck.open(env, store, log_path, eval_every, eval_episodes, seed)
@@ -408,6 +461,7 @@ def train(
     journal = discard_unfinished and n > 1
     loop = make_robots(env, agents, seed, TRAIN_STREAM, compiled=compiled, journal=journal)
     files.before_save = loop.sync_table
+    files.changed_rows = loop.changed_rows
     progress = Progress()
     results: list[EpisodeResult] = []
     checks: list[Check] = []
@@ -462,8 +516,7 @@ def train(
                             checker, env, loop, first + finished, guard, checks, report
                         )
                     start(r)
-                if files.unsaved:  # the end (or a stop between episodes): always saved
-                    files.save()
+                files.checkpoint()  # the end (or a stop between episodes): always durable
             except KeyboardInterrupt:
                 interrupted = True
                 table = _interrupted(loop, files, discard_unfinished, results, report, finished)

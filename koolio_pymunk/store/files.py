@@ -136,14 +136,18 @@ def atomic_write(path: str | Path, data: bytes, make_parents: bool = True) -> No
 
 @contextlib.contextmanager
 def staged_write(
-    path: str | Path, data: bytes, make_parents: bool = True
+    path: str | Path, data: bytes, make_parents: bool = True, durable: bool = True
 ) -> Iterator[os.stat_result]:
     """:func:`atomic_write` in two stages: ``data`` is written to the temporary file and
     fsynced on entry, and renamed over ``path`` when the block ends without an exception
     (an exception removes the temporary file and leaves ``path`` as it was). Yields the
     temporary file's ``fstat``: the target's :func:`identity` once renamed. The block
     runs between the two: a backup of the file about to be replaced is made there
-    (:func:`atomic_link`), after the new data is safely on disk."""
+    (:func:`atomic_link`), after the new data is safely on disk.
+
+    ``durable`` False skips the fsync: the replace is still atomic for every process (a
+    killed one included), but a power loss may leave the file empty or torn; with True,
+    :func:`fsync_dir` after the block makes the new name itself survive one."""
     path = _writable(path, make_parents)
     mode = _mode_for(path)
     try:
@@ -157,10 +161,28 @@ def staged_write(
             fh.write(data)
             fh.flush()
             os.fchmod(fh.fileno(), mode)
-            os.fsync(fh.fileno())
+            if durable:
+                os.fsync(fh.fileno())
             written = os.fstat(fh.fileno())
         yield written
         os.replace(tmp, path)
+
+
+@contextlib.contextmanager
+def fsync_dir(folder: str | Path) -> None:
+    """Make the names of ``folder`` (a rename, a new link, an unlink) survive a power loss
+    (POSIX: fsync of the directory). Best effort: a file system that cannot (some network
+    or virtual ones) is left as it is."""
+    try:
+        fd = os.open(folder, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
 
 
 @contextlib.contextmanager

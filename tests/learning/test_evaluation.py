@@ -215,7 +215,7 @@ def test_ctrl_c_in_a_check_drops_it_and_resume_runs_it(tmp_path, monkeypatch) ->
 def test_rows_beyond_the_table_move_out(tmp_path, capsys) -> None:
     """A table that fell back to its backup: the checks beyond it run again."""
     run(tmp_path, "full", 6)
-    q, _, _ = run(tmp_path, "part", 4)
+    q, _, _ = run(tmp_path, "part", 4, fsync="episode")  # the backup: the previous table
     q.write_bytes((tmp_path / "part.qtable.bak").read_bytes())  # 3 episodes
     text = (tmp_path / "part.evals.csv").read_text()
     (tmp_path / "part.evals.csv").write_text(text + "6,4,0,0.5")  # and a torn row

@@ -33,9 +33,9 @@ def counted_saves(monkeypatch) -> list[int]:
     saves: list[int] = []
     real = qtable_module.QTableStore.save
 
-    def save(self, table):
+    def save(self, table, durable=True):
         saves.append(int(table.meta.get("episodes", 0)))
-        return real(self, table)
+        return real(self, table, durable)
 
     monkeypatch.setattr(qtable_module.QTableStore, "save", save)
     return saves
@@ -54,7 +54,7 @@ def test_the_cadence_changes_when_not_what(tmp_path, monkeypatch, every, seconds
     saves = counted_saves(monkeypatch)
     b = tmp_path / "b.qtable"
     train(env(), QTableStore(b), 20, 3, tmp_path / "b.csv", report=None,
-          save_every=every, save_seconds=seconds)  # fmt: skip
+          save_every=every, save_seconds=seconds, fsync="episode")  # fmt: skip
     assert saves == expected
     assert b.read_bytes() == (tmp_path / "a.qtable").read_bytes()
     assert (tmp_path / "b.csv").read_bytes() == (tmp_path / "a.csv").read_bytes()
@@ -134,7 +134,7 @@ def test_exit_without_save_writes_nothing_more(tmp_path, monkeypatch) -> None:
 
     monkeypatch.setattr(Env, "simulate", simulate)
     saves = counted_saves(monkeypatch)
-    argv = _argv(tmp_path, "d", "--save-every", "3", "--discard-unfinished")
+    argv = _argv(tmp_path, "d", "--save-every", "3", "--discard-unfinished", "--fsync", "episode")
     assert main(argv) == 130
     assert saves and all(s % 3 == 0 for s in saves)  # no save at the stop
     table = load_qtable(tmp_path / "d.qtable")
