@@ -76,6 +76,7 @@ from ..store.errors import FileError, KoolioError, QTableError, located, shown
 from ..store.files import (
     atomic_link,
     atomic_write,
+    check_writable,
     file_error,
     fsync_dir,
     identity,
@@ -373,18 +374,13 @@ class QTableStore:
     check something before any file is written (the training log) calls them itself.
 
     **The two ways of keeping a table** (``fsync``; ``koolio-pm train --fsync``,
-    docs/robustness.md):
-
-    * ``episode`` (the paper's rule): every save is a snapshot, written, fsynced and put
-      in place atomically; the previous good table becomes the backup;
-    * ``second``: snapshots are written durably (fsynced, the folder too) when the caller
-      asks (at most once a second, at the end, on Ctrl-C and SIGTERM: ``RunFiles``), and
-      the backup is then the same durable file; the episodes between two snapshots go to
-      the journal (:meth:`append`: written, not fsynced), or, for a table whose changes
-      are not tracked, to a snapshot that is not fsynced (``save(durable=False)``,
-      the backup untouched). A killed process loses no finished episode either way; a
-      power loss at most the last second, and the table still loads (the backup, or the
-      snapshot and its journal's whole records).
+    docs/robustness.md). Every snapshot is written, fsynced (its folder too) and put in
+    place atomically, and the previous good table becomes the backup; the table file is
+    never replaced otherwise. ``episode`` (the paper's rule): every save is a snapshot.
+    ``second``: the caller (``RunFiles``) asks for a snapshot at most once a second, at
+    the end, on Ctrl-C and SIGTERM; the episodes between two snapshots go to the journal
+    (:meth:`append`: written, not fsynced). A killed process loses no finished episode
+    either way; a power loss at most the last second, and the table still loads.
     """
 
     def __init__(
@@ -455,6 +451,8 @@ class QTableStore:
         error the lock is released again."""
         self.lock()
         try:
+            for later in (self.backup, self.journal):  # written later: refused now
+                check_writable(later)
             table = self._load_existing()
             self.fresh = table is None
             if table is None:
@@ -502,41 +500,38 @@ class QTableStore:
         self.fresh = False
         self.created = True
 
-    def save(self, table: QTable, durable: bool = True) -> None:
-        """Write ``table`` whole (a snapshot) and start its journal afresh. ``episode``
-        mode: fsynced, the previous good table becomes the backup once the new one is on
-        disk, before it replaces the file (:meth:`_keep_backup`). ``second`` mode:
-        ``durable`` writes it fsynced (its folder too) and makes that file the backup as
-        well; otherwise it is put in place unsynced and the backup (the last durable
-        snapshot) is left alone (class doc)."""
+    def save(self, table: QTable) -> None:
+        """Write ``table`` whole (a snapshot), durably (the file and its folder fsynced):
+        the previous good table becomes the backup once the new one is on disk, before it
+        replaces the file (:meth:`_keep_backup`); the journal is then removed."""
         self.lock()
         data = table.to_bytes()
         self._close_journal()
-        if self.fsync == "episode":
-            with staged_write(self.path, data) as written:
-                if self._last is not None and self._last != data:
-                    self._keep_backup()
-        else:
-            with staged_write(self.path, data, durable=durable) as written:
-                pass
+        with staged_write(self.path, data) as written:
+            if self._last is not None and self._last != data:
+                self._keep_backup()
         self._written = identity(written)
         self._last = data
-        if self.fsync != "episode" and durable:
-            self._keep_backup()
         self._drop_journal()
-        if durable:
-            fsync_dir(self.path.parent)
+        fsync_dir(self.path.parent)
 
-    def append(self, table: QTable, keys: np.ndarray, values: np.ndarray) -> None:
-        """Add a journal record: rows ``keys`` hold ``values`` (the rows an episode
-        changed) and the table ``table.meta["episodes"]`` episodes. Written, not fsynced:
-        a killed process loses nothing (module :mod:`~koolio_pymunk.learning.table_journal`).
+    def append(
+        self, table: QTable, keys: np.ndarray | None = None, values: np.ndarray | None = None
+    ) -> None:
+        """Add a journal record (``second`` mode, between two snapshots): rows ``keys``
+        hold ``values`` (the rows an episode changed) and the table
+        ``table.meta["episodes"]`` episodes; without ``keys``, the whole table (a learner
+        whose changes are not tracked, a table with data sections). Written, not fsynced:
+        a killed process loses nothing (:mod:`~koolio_pymunk.learning.table_journal`).
         The table file must hold the snapshot the journal continues (a :meth:`save` or a
         :meth:`load` since)."""
         self.lock()
         if self._last is None:
             raise ValueError("append: no snapshot yet (save or load the table first)")
-        rec = table_journal.record(int(table.meta.get("episodes", 0)), keys, values)
+        if keys is None:
+            rec = table_journal.whole_record(table.to_bytes())
+        else:
+            rec = table_journal.record(int(table.meta.get("episodes", 0)), keys, values)
         try:
             if self._journal_fd is None:
                 self._journal_fd = self._open_journal()
@@ -655,9 +650,17 @@ def with_journal(table: QTable, data: bytes, path: Path, warn=None) -> QTable:
             raise
         return table
     found = table_journal.records(journal, data, table.layout.n_actions, str(path))
-    rows = table.rows
-    for k, (episodes, keys, values) in enumerate(found.records, start=1):
-        check_rows(keys, values.reshape(-1), table.layout, f"{path}: record {k}")
+    for k, rec in enumerate(found.records, start=1):
+        where = f"{path}: record {k}"
+        if rec[0] == table_journal.WHOLE:
+            whole = QTable.from_bytes(rec[1], where)
+            if whole.layout != table.layout:
+                raise QTableError(located(str(path), f"record {k}", "a table of another layout"))
+            table.meta, table.rows, table.sections = whole.meta, whole.rows, whole.sections
+            continue
+        _, episodes, keys, values = rec
+        check_rows(keys, values.reshape(-1), table.layout, where)
+        rows = table.rows
         for key, row in zip(keys.tolist(), values.tolist()):
             rows[key] = row
         table.meta["episodes"] = episodes

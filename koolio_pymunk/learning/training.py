@@ -183,16 +183,15 @@ class RunFiles:
         self.changed_rows: Callable[[], tuple] | None = None
         """The rows changed since its last call, as ``(keys, values)`` arrays (the
         engine's): with ``--fsync second`` they go to the table's journal between two
-        snapshots. None: the changes are not tracked (the Python loop), and the table is
-        written whole, unsynced, between two durable snapshots."""
+        snapshots. None: the changes are not tracked (the Python loop), and the journal
+        gets the whole table."""
         self._saved_at = self._durable_at = time.monotonic()
         self.first = int(table.meta.get("episodes", 0))
         """Episodes the table held when the run opened it."""
         self.unsaved = 0
         """Finished episodes recorded since the last save."""
         self.undurable = 0
-        """Finished episodes saved (in the journal, or an unsynced snapshot) since the last
-        durable snapshot."""
+        """Finished episodes saved in the journal since the last snapshot."""
 
     @classmethod
     def open(
@@ -302,18 +301,19 @@ class RunFiles:
         store's ``fsync`` mode keeps them (:class:`~koolio_pymunk.learning.qtable.QTableStore`):
         ``episode``, a durable snapshot; ``second``, a durable snapshot when
         :data:`CHECKPOINT_SECONDS` passed since the last one, else a journal record of
-        the rows changed (or, untracked, an unsynced snapshot)."""
+        the rows changed (untracked changes, or a table with data sections: the whole
+        table)."""
         now = time.monotonic()
         if self.store.fsync == "episode" or now - self._durable_at >= CHECKPOINT_SECONDS:
             self.save()
             return
-        if self.changed_rows is not None:
+        if self.changed_rows is not None and not self.table.sections:
             keys, values = self.changed_rows()
             self.store.append(self.table, keys, values)
-        else:
+        else:  # untracked changes, or data sections (Dyna-Q's model): the whole table
             if self.before_save is not None:
                 self.before_save()
-            self.store.save(self.table, durable=False)
+            self.store.append(self.table)
         self.undurable += self.unsaved
         self.unsaved = 0
         self._saved_at = now

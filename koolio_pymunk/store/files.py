@@ -200,13 +200,21 @@ def _temporary(tmp: str | Path, path: Path) -> Iterator[None]:
         raise
 
 
-def _writable(path: str | Path, make_parents: bool) -> Path:
-    """``path`` checked as the target of an atomic write (not a folder, a FIFO, a device
-    or a socket), its folder made, the stale temporary files of its writes removed."""
+def check_writable(path: str | Path) -> Path:
+    """``path`` checked as the target of an atomic write, changing nothing: not a folder,
+    a FIFO, a device or a socket (:class:`FileError`); a caller that writes it later asks
+    first, so that a refusal comes before any other file is written."""
     path = check_path(path)
     if path.is_dir():
         raise FileError(located(_name(path), "", "cannot write: is a folder, not a file"))
     _check_target(path)
+    return path
+
+
+def _writable(path: str | Path, make_parents: bool) -> Path:
+    """``path`` checked as the target of an atomic write (not a folder, a FIFO, a device
+    or a socket), its folder made, the stale temporary files of its writes removed."""
+    path = check_writable(path)
     if make_parents:
         make_parent(path)
     remove_stale_temps(path)

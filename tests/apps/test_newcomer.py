@@ -262,7 +262,7 @@ def test_eval_warns_on_an_empty_table(here, capsys) -> None:
 
 
 def test_eval_falls_back_to_the_backup_as_train_does(here, capsys) -> None:
-    argv = ["--qtable", "q.qtable", "--log", "q.csv"]
+    argv = ["--qtable", "q.qtable", "--log", "q.csv", "--fsync", "episode"]
     assert run(capsys, "train", *ROOM, *argv, "--episodes", "2", "--quiet")[0] == 0
     data = (here / "q.qtable").read_bytes()
     (here / "q.qtable").write_bytes(data[: len(data) // 2])  # torn

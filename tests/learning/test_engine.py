@@ -354,10 +354,10 @@ def test_save_every_with_robots(tmp_path, monkeypatch) -> None:
         original(self, table)
 
     monkeypatch.setattr(QTableStore, "save", counting)
-    run(tmp_path, "a", episodes=5, robots_=2, save_every=1)
+    run(tmp_path, "a", episodes=5, robots_=2, save_every=1, fsync="episode")
     assert saves == [1, 2, 3, 4, 5]
     saves.clear()
-    run(tmp_path, "b", episodes=5, robots_=2)  # default: every `robots` episodes and last
+    run(tmp_path, "b", episodes=5, robots_=2, fsync="episode")  # every `robots` and the last
     assert saves == [2, 4, 5]
 
 

@@ -33,9 +33,9 @@ def counted_saves(monkeypatch) -> list[int]:
     saves: list[int] = []
     real = qtable_module.QTableStore.save
 
-    def save(self, table, durable=True):
+    def save(self, table):
         saves.append(int(table.meta.get("episodes", 0)))
-        return real(self, table, durable)
+        return real(self, table)
 
     monkeypatch.setattr(qtable_module.QTableStore, "save", save)
     return saves
