@@ -27,7 +27,7 @@ from typing import NoReturn
 from .. import __version__
 from ..store.errors import KoolioError, located
 from ..store.interrupts import exit_status
-from .flags import MAX_EPISODES, episodes_type, float_type, int_type
+from .flags import MAX_EPISODES, episodes_type, file_name, float_type, int_type
 from .flags import seed_type as seed_type
 
 DEFAULT_QTABLE = "runs/hallway.qtable"
@@ -279,12 +279,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
 
     p = sub.add_parser("check-arena", help="validate an arena file")
-    p.add_argument("file", help="arena file or built-in name")
+    p.add_argument("file", type=file_name, help="arena file or built-in name")
     p.add_argument("--robot", default="koolio", help="robot profile for clearance checks")
 
     p = sub.add_parser("info", help="state-space sizes (paper §5.4.8) and table figures")
-    p.add_argument("--config", default=None, help="YAML configuration file")
-    p.add_argument("--qtable", default=None, help="also describe this Q-table file")
+    p.add_argument(
+        "--config", type=file_name, default=None, help="YAML configuration file or profile name"
+    )
+    p.add_argument("--qtable", type=file_name, default=None, help="also describe this Q-table file")
 
     for name, module in EXTRA_COMMANDS.items():
         mod = importlib.import_module(module)

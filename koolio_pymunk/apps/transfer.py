@@ -699,20 +699,24 @@ def plot_or_note(result: dict[str, Any], out: Path, say: Report) -> None:
 
 # -- command line ------------------------------------------------------------------------------
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from .flags import MAX_EPISODES, float_type, int_type, seed_type
+    from .flags import MAX_EPISODES, file_name, float_type, int_type, seed_type
 
     d = TransferConfig()
     episodes, probability = int_type(0, MAX_EPISODES), float_type(0.0, 1.0)
-    p.add_argument("--arena", default=d.arena, help="arena file or built-in name")
-    p.add_argument("--config", default=None, help="YAML configuration file or profile name")
+    p.add_argument("--arena", type=file_name, default=d.arena, help="arena file or built-in name")
+    p.add_argument(
+        "--config", type=file_name, default=None, help="YAML configuration file or profile name"
+    )
     p.add_argument("--goal", default=None, help="goal (door) name (default: the arena's)")
     p.add_argument(
         "--world",
+        type=file_name,
         default=d.world,
         help=f"the realistic world standing in for the robot (default {d.world})",
     )
     p.add_argument(
         "--dr-world",
+        type=file_name,
         default=d.dr_world,
         help=f"world of the domain-randomized training (default {d.dr_world})",
     )
@@ -731,11 +735,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--qtable",
+        type=file_name,
         default=None,
         help="load the ideal-world table instead of training ({seed}: the run seed)",
     )
     p.add_argument(
-        "--dr-qtable", default=None, help="load the randomized table instead of training"
+        "--dr-qtable",
+        type=file_name,
+        default=None,
+        help="load the randomized table instead of training",
     )
     p.add_argument(
         "--robot-episodes",
@@ -775,7 +783,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "episode count)",
     )
     p.add_argument(
-        "--out", default="runs/transfer", help="new or empty output folder (default runs/transfer)"
+        "--out",
+        type=file_name,
+        default="runs/transfer",
+        help="new or empty output folder (default runs/transfer)",
     )
     p.add_argument("--no-plot", action="store_true", help="do not draw transfer.png")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
