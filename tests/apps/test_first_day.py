@@ -1,0 +1,203 @@
+"""A researcher's first day (issue 33): the newcomer's surprises, each as it was met.
+
+Nothing hangs without a display, no flag takes an empty file name, SDL's chatter about
+``XDG_RUNTIME_DIR`` is not printed, a scripted editor run says what it wrote.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
+
+from koolio_pymunk.apps import cli
+
+REPO = Path(__file__).resolve().parents[2]
+XDG_LINE = "XDG_RUNTIME_DIR is invalid or not set"
+
+
+@pytest.fixture
+def here(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """An empty working folder with a tiny configuration (30-step episodes)."""
+    (tmp_path / "tiny.yaml").write_text("episode: {max_steps: 30}\n")
+    monkeypatch.chdir(tmp_path)
+    return tmp_path
+
+
+def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
+    """``koolio-pm argv``: exit status, stdout, stderr."""
+    try:
+        code = cli.main(list(argv))
+    except SystemExit as exc:
+        code = exc.code
+    out, err = capsys.readouterr()
+    return int(code or 0), out, err
+
+
+def no_display_env() -> dict[str, str]:
+    """The environment of a machine without a display: no SDL driver asked for, no X11 or
+    Wayland display, no XDG_RUNTIME_DIR (a container, a CI runner)."""
+    env = dict(os.environ)
+    for name in ("SDL_VIDEODRIVER", "DISPLAY", "WAYLAND_DISPLAY", "XDG_RUNTIME_DIR"):
+        env.pop(name, None)
+    env["PYTHONPATH"] = str(REPO)
+    return env
+
+
+def koolio_pm(folder: Path, *argv: str, env: dict[str, str]) -> subprocess.CompletedProcess:
+    """``python -m koolio_pymunk argv`` in ``folder``; a hang fails the test (timeout)."""
+    return subprocess.run(
+        [sys.executable, "-m", "koolio_pymunk", *argv],
+        cwd=folder,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+
+
+# -- edit refuses to wait for a person nobody can see ----------------------------------------
+@pytest.mark.parametrize(
+    ("argv", "how"),
+    [
+        (["edit", "room"], "give --script FILE (and --screenshot PNG to see the result)"),
+        (
+            ["edit", "--new", "lab.yaml"],
+            "give --script FILE (and --screenshot PNG to see the result)",
+        ),
+        (["edit", "room", "--script", "s.txt", "--stay"], "leave out --stay"),
+        (["edit", "room", "--screenshot", "x.png", "--stay"], "leave out --stay"),
+    ],
+)
+def test_edit_without_a_display_refuses_in_one_line(here, capsys, argv, how) -> None:
+    assert os.environ["SDL_VIDEODRIVER"] == "dummy"  # the premise: nothing is shown
+    (here / "s.txt").write_text("view fit\n")
+    code, out, err = run(capsys, *argv)
+    assert code == 2 and out == ""
+    assert err == (
+        "koolio-pm: error: edit: headless (SDL_VIDEODRIVER=dummy): the editor needs a "
+        f"display; {how}\n"
+    )
+    assert sorted(p.name for p in here.iterdir()) == ["s.txt", "tiny.yaml"]
+
+
+def test_edit_on_a_machine_without_a_display_refuses_and_says_nothing_of_sdl(here) -> None:
+    """No SDL_VIDEODRIVER, no DISPLAY, no XDG_RUNTIME_DIR: SDL falls back to its offscreen
+    driver, and the command refuses in one line (it used to wait until killed) without
+    libwayland's line about XDG_RUNTIME_DIR; a screenshot run works and says so."""
+    env = no_display_env()
+    done = koolio_pm(here, "edit", "room", env=env)
+    assert done.returncode == 2 and done.stdout == ""
+    assert done.stderr == (
+        "koolio-pm: error: edit: headless (no display: DISPLAY and WAYLAND_DISPLAY are not "
+        "set): the editor needs a display; give --script FILE (and --screenshot PNG to see "
+        "the result)\n"
+    )
+    done = koolio_pm(here, "edit", "room", "--screenshot", "room.png", env=env)
+    assert done.returncode == 0 and done.stderr == ""
+    assert done.stdout.endswith("valid; screenshot room.png\n")
+    assert (here / "room.png").stat().st_size > 1000
+
+
+def test_view_without_a_display_prints_only_its_own_lines(here) -> None:
+    """A headless ``view`` on a machine without XDG_RUNTIME_DIR: its two lines on stdout
+    and nothing on stderr (no SDL message; the kernels compiled by earlier tests)."""
+    args = ["view", "--arena", "room", "--config", "tiny.yaml", "--qtable", "v.qtable"]
+    done = koolio_pm(here, *args, "--steps", "3", "--screenshot", "v.png", env=no_display_env())
+    assert done.returncode == 0, done.stderr
+    compiling = "compiling the simulator's kernels"  # a cold cache's own line, if any
+    assert [ln for ln in done.stderr.splitlines() if not ln.startswith(compiling)] == []
+    assert done.stdout.count("\n") == 2 and done.stdout.startswith("view: learning into")
+
+
+def test_only_libwayland_s_line_is_dropped_from_the_display_start(capfd) -> None:
+    """What C code writes to the standard error while the display starts is kept, but
+    for libwayland's line (both its wordings)."""
+    from koolio_pymunk.task.display import quiet_stderr
+
+    with quiet_stderr():
+        os.write(2, b"error: XDG_RUNTIME_DIR is invalid or not set in the environment.\n")
+        os.write(2, b"ALSA lib pcm.c: a real problem\n")
+        os.write(2, b"error: XDG_RUNTIME_DIR not set in the environment.\n")
+    assert capfd.readouterr().err == "ALSA lib pcm.c: a real problem\n"
+
+
+# -- no flag takes an empty file name ---------------------------------------------------------
+#: Flags (by argparse dest) that name a file or a folder, positional ones included.
+FILE_DESTS = {
+    "arena", "config", "world", "dr_world", "qtable", "dr_qtable", "init_qtable", "log",
+    "logs", "out", "evals", "script", "screenshot", "screenshot_every", "doors", "file", "spec",
+}  # fmt: skip
+#: What each command needs besides the flag under test to get that far.
+NEEDS = {"export": ["--out", "p.json"], "view": ["--steps", "1"]}
+#: ``--log ''`` is documented: no log.
+NO_LOG = {("train", "log"), ("view", "log")}
+
+
+def empty_name_cases() -> list[list[str]]:
+    """``koolio-pm CMD FLAG ''`` for every file-name flag of every command, from the
+    parsers themselves (a new flag is checked without a new line here)."""
+    import argparse
+
+    sub = next(a for a in cli.build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    cases = []
+    for command, parser in sub.choices.items():
+        for action in parser._actions:
+            if action.dest not in FILE_DESTS or (command, action.dest) in NO_LOG:
+                continue
+            if not action.option_strings:
+                cases.append([command, ""])
+                continue
+            flag = action.option_strings[0]
+            needs = [w for w in NEEDS.get(command, []) if flag != "--out"]
+            value = ["1", ""] if action.dest == "screenshot_every" else [""]
+            cases.append([command, *needs, flag, *value])
+    return cases
+
+
+def test_the_empty_name_cases_cover_every_command_that_takes_files() -> None:
+    commands = {case[0] for case in empty_name_cases()}
+    assert commands == {
+        "train", "eval", "check-arena", "info", "view", "plot", "export", "sweep", "transfer",
+        "edit",
+    }  # fmt: skip
+    assert ["edit", "--script", ""] in empty_name_cases()
+    assert ["transfer", "--out", ""] in empty_name_cases()
+
+
+@pytest.mark.parametrize("argv", empty_name_cases(), ids=" ".join)
+def test_no_flag_takes_an_empty_file_name(here, capsys, argv) -> None:
+    """One line saying the name is empty, exit 2, nothing run or written (``transfer
+    --out ''`` trained into the current folder, ``edit --script ''`` opened the editor,
+    ``view --screenshot ''`` said ``: must end in .png``)."""
+    code, out, err = run(capsys, *argv)
+    assert code == 2 and out == ""
+    assert err.count("\n") == 1 and "empty file name" in err, err
+    assert sorted(p.name for p in here.iterdir()) == ["tiny.yaml"]
+
+
+# -- edit says what it wrote -----------------------------------------------------------------
+def test_a_scripted_edit_names_its_screenshot_and_the_arena_the_script_made(here, capsys):
+    from koolio_pymunk.apps.editor.app import EditorApp
+    from koolio_pymunk.apps.editor.model import EditorModel
+    from koolio_pymunk.apps.editor.script import run_script
+
+    script = REPO / "examples" / "editor-script.txt"
+    code, out, err = run(capsys, "edit", "--script", str(script), "--screenshot", "e.png")
+    assert code == 0 and err == ""
+    assert out == (
+        f"edit: script {script} run; arena 'office' (not saved yet): valid; screenshot e.png\n"
+    )
+    assert (here / "e.png").stat().st_size > 1000
+    app = EditorApp(EditorModel.blank(), (1280, 720))
+    run_script(app, script)
+    assert app.model.describe() == "arena 'office' (not saved yet)"  # the status bar's words
+    code, out, err = run(capsys, "edit", "room", "--screenshot", "r.png")
+    assert code == 0 and out.startswith("edit: arena 'room' (")
+    assert out.endswith("room.yaml): valid; screenshot r.png\n")
