@@ -201,3 +201,49 @@ def test_a_scripted_edit_names_its_screenshot_and_the_arena_the_script_made(here
     code, out, err = run(capsys, "edit", "room", "--screenshot", "r.png")
     assert code == 0 and out.startswith("edit: arena 'room' (")
     assert out.endswith("room.yaml): valid; screenshot r.png\n")
+
+
+# -- one numbering of episodes --------------------------------------------------------------
+def test_the_window_numbers_episodes_from_1_as_train_the_curve_and_the_log_do(here, capsys):
+    """After 6 finished episodes the Stats say #6 while the 6th's end is shown and #7 once
+    the next one runs (it said #6 for the 7th); ``train``'s progress counts the same
+    6; the log's episode column is the number less one (its format is unchanged)."""
+    import pygame
+
+    from koolio_pymunk.apps.viewer import hud
+    from koolio_pymunk.apps.viewer.session import Session
+    from koolio_pymunk.task.env import KoolioEnv
+
+    env = KoolioEnv(arena="room", config="tiny.yaml")
+    session = Session(env, "w.qtable", log="w.csv")
+    heading = hud.stats_rows(session, 0.0)[0][1]
+    assert heading.startswith("This episode (#1,")
+    while session.stats.episodes < 6:
+        session.step()
+    assert session.episode_over  # the 6th's end is on the screen
+    assert hud.stats_rows(session, 0.0)[0][1].startswith("This episode (#6,")
+    session.step()
+    assert hud.stats_rows(session, 0.0)[0][1].startswith("This episode (#7,")
+    session.exit(save=False)
+    rows = (here / "w.csv").read_text().splitlines()[1:]
+    assert [r.split(",")[0] for r in rows] == ["0", "1", "2", "3", "4", "5"]
+    code, out, _ = run(capsys, "train", "--arena", "room", "--config", "tiny.yaml",
+                       "--qtable", "t.qtable", "--episodes", "6")  # fmt: skip
+    assert code == 0 and "episode      6/6 " in out
+    surface = pygame.Surface((420, 320))
+    drawn = hud.draw_curve(surface, pygame.Rect(0, 0, 420, 320), session.stats.returns)
+    assert drawn["x_ticks"][-1] == 6.0  # the 6th return is drawn at "6"
+
+
+@pytest.mark.parametrize("n", range(2, 40))
+def test_the_live_curve_labels_whole_episodes_once_each(n) -> None:
+    """Early on the x axis read ``1 1 1 2 2 2`` (ticks 1.0, 1.2, ... rounded)."""
+    import pygame
+
+    from koolio_pymunk.apps.viewer import hud
+
+    surface = pygame.Surface((420, 320))
+    drawn = hud.draw_curve(surface, pygame.Rect(0, 0, 420, 320), [0.0] * n)
+    ticks = drawn["x_ticks"]
+    assert ticks and all(t == int(t) and 1 <= t <= n for t in ticks)
+    assert len({f"{t:,.0f}" for t in ticks}) == len(ticks)
