@@ -544,29 +544,89 @@ def _train_opening(args: argparse.Namespace, env, start, done: int, more: int) -
     return f"{head}, {more} more to reach --episodes {args.episodes}; {where}"
 
 
+def config_label(name: str | None, flag: str = "--config") -> str:
+    """A configuration (``--config``) or world (``--world``, ``--dr-world``) as it
+    resolved: the built-in defaults, the ideal world, a shipped profile or a file.
+
+    >>> config_label(None), config_label("paper"), config_label("my.yaml")
+    ('the built-in defaults (no --config)', 'profile paper', 'file my.yaml')
+    >>> config_label(None, "--world"), config_label("koolio-real", "--world")
+    ('ideal (nothing laid over the configuration)', 'world profile koolio-real')
+    """
+    from ..store.config import PROFILE_DIR, config_path
+
+    world = flag.endswith("world")
+    if name is None or (world and str(name) == "ideal"):
+        return (
+            "ideal (nothing laid over the configuration)"
+            if world
+            else (f"the built-in defaults (no {flag})")
+        )
+    path = config_path(name, flag)
+    if path.parent == PROFILE_DIR and path.stem == str(name):
+        return f"{'world ' if world else ''}profile {name}"
+    return f"file {path}"
+
+
+def goal_label(env, asked: str | None) -> str:
+    """The goal a run in ``env`` learns for, as it resolved (``asked``: ``--goal``)."""
+    if env.random_goal:
+        names = env.world_arena.goal_names()
+        return f"random: one of {len(names)} doors per episode ({', '.join(names)})"
+    where = f"{env.goal_name} at {env.world_arena.goal().at}"
+    return where + (" (the arena's active goal)" if asked is None else "")
+
+
 def _print_configuration(args: argparse.Namespace, env, say) -> None:
-    """``train --verbose``: the flags, the active goal and the whole configuration."""
+    """``train --verbose``: the run as it resolved (every default filled in, nothing
+    ``None``), then the whole configuration."""
+    every = args.save_every or args.robots
+    saves = "every episode" if every == 1 else f"every {count(every, 'episode')}"
+    if args.save_seconds is not None:
+        saves += f", and when {args.save_seconds:g} s passed since the last save"
+    exit_ = "discarded (Exit Without Save)" if args.discard_unfinished else "folded in (Exit)"
+    rows = [
+        ("arena", f"{env.arena.name} ({env.arena.source})"),
+        ("goal", goal_label(env, args.goal)),
+        ("episodes", f"{args.episodes} (the total the table reaches)"),
+        ("seed", args.seed),
+        ("qtable", args.qtable),
+        ("log", args.log or "none (--log '')"),
+        ("config", config_label(args.config)),
+        ("world", config_label(args.world, "--world")),
+        ("robots", args.robots),
+    ]
+    if args.init_qtable:
+        rows.append(("init-qtable", f"{args.init_qtable} (the new table starts from it)"))
+    if args.eval_every:
+        check = count(args.eval_episodes, "episode")
+        rows.append(("eval-every", f"a greedy check of {check} every {args.eval_every}"))
+    rows += [("saves", saves), ("on Ctrl-C", f"the unfinished episode is {exit_}")]
     say("koolio-pm train")
-    for key in (
-        "arena",
-        "goal",
-        "episodes",
-        "seed",
-        "qtable",
-        "log",
-        "config",
-        "world",
-        "robots",
-        "init_qtable",
-        "discard_unfinished",
-        "eval_every",
-        "eval_episodes",
-    ):
-        say(f"  {key}: {getattr(args, key)}")
-    say(f"  active goal: {env.goal_name} at {env.world_arena.goal().at}")
+    for key, value in rows:
+        say(f"  {key}: {value}")
     say("configuration:")
-    for line in env.config.to_yaml().splitlines():
+    for line in resolved_yaml(env.config).splitlines():
         say("  " + line)
+
+
+def resolved_yaml(cfg) -> str:
+    """``cfg`` as YAML with its values as they resolve: the fields whose ``None`` means
+    "another field's" (``robot.robot_radius``: the robot profile's radius;
+    ``realism.sonar.max_range``: ``sensors.sonar.max_range``) show that value.
+
+    >>> from koolio_pymunk.store.config import load_config
+    >>> "null" in resolved_yaml(load_config()), "null" in load_config().to_yaml()
+    (False, True)
+    """
+    from ..store.yamlfile import dump_yaml
+
+    data = cfg.to_dict()
+    data["robot"]["robot_radius"] = cfg.robot.radius
+    sonar = data.get("realism", {}).get("sonar", {})
+    if sonar.get("max_range", 0) is None:
+        sonar["max_range"] = cfg.sensors.sonar.max_range
+    return dump_yaml(data, sort_keys=False, default_flow_style=None)
 
 
 def _eval_every_args(args: argparse.Namespace) -> dict[str, int]:

@@ -247,3 +247,45 @@ def test_the_live_curve_labels_whole_episodes_once_each(n) -> None:
     ticks = drawn["x_ticks"]
     assert ticks and all(t == int(t) and 1 <= t <= n for t in ticks)
     assert len({f"{t:,.0f}" for t in ticks}) == len(ticks)
+
+
+# -- configuration dumps: resolved values, and only when asked ---------------------------------
+def test_train_verbose_shows_every_setting_resolved(here, capsys) -> None:
+    """``goal: None``, ``config: None``, ``world: None`` were listed before the values
+    they stand for; now every line says what the run uses."""
+    code, out, _ = run(capsys, "train", "--arena", "room", "--episodes", "1", "--verbose")
+    assert code == 0
+    settings = out.split("koolio-pm train\n", 1)[1].split("configuration:\n", 1)
+    lines = settings[0].splitlines()
+    assert "  goal: 201 at (102.0, 191.0) (the arena's active goal)" in lines
+    assert "  config: the built-in defaults (no --config)" in lines
+    assert "  world: ideal (nothing laid over the configuration)" in lines
+    assert not [ln for ln in out.splitlines() if "None" in ln or "null" in ln]
+    assert "robot_radius: 10.0" in settings[1]  # the profile's radius, not null
+    more = ["--config", "tiny.yaml", "--world", "koolio-real", "--qtable", "r.qtable"]
+    code, out, _ = run(capsys, "train", "--arena", "room", "--episodes", "1", "--verbose", *more)
+    assert code == 0 and "  config: file tiny.yaml\n" in out
+    assert "  world: world profile koolio-real\n" in out
+    assert not [ln for ln in out.splitlines() if "None" in ln or "null" in ln]
+
+
+TRANSFER = ["transfer", "--arena", "room", "--config", "tiny.yaml", "--episodes", "1",
+            "--robot-episodes", "1", "--eval-episodes", "1", "--eval-every", "1",
+            "--no-plot"]  # fmt: skip
+
+
+def test_transfer_dumps_its_settings_only_with_verbose(here, capsys) -> None:
+    code, out, _ = run(capsys, *TRANSFER, "--out", "a")
+    assert code == 0
+    first, second = out.splitlines()[:2]
+    assert first.startswith("transfer: seed 0: tables from the ideal world and koolio-real-dr")
+    assert second.startswith("[seed 0, ideal table]")  # no dump of 18 lines
+    code, out, _ = run(capsys, *TRANSFER, "--out", "b", "--verbose")
+    assert code == 0
+    dump = [ln for ln in out.splitlines() if ln.startswith("  ")][:14]
+    assert dump[0] == f"  arena: room ({REPO / 'arenas' / 'room.yaml'})"
+    assert "  config: file tiny.yaml" in dump
+    assert "  robot alpha: 0.2 (config's)" in dump
+    assert not [ln for ln in dump if "None" in ln or "(default)" in ln]
+    code, out, _ = run(capsys, *TRANSFER, "--out", "c", "--quiet", "--verbose")
+    assert code == 0 and not out.startswith("transfer:")  # --quiet: the results only
