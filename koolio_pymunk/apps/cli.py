@@ -408,7 +408,8 @@ def cmd_train(args: argparse.Namespace) -> int:
     checks = _eval_every_args(args)
     env = _make_env(args)
     say = (lambda s: None) if args.quiet else print
-    store = QTableStore(args.qtable, purpose="koolio-pm train")
+    fallbacks: list[str] = []  # the table's file damaged or missing: its backup is used
+    store = QTableStore(args.qtable, purpose="koolio-pm train", warn=_warn_once(fallbacks))
     # Everything that reading can check comes first: an error is the only line printed,
     # and no file (not even a lock file) is left behind.
     if args.robots > 1:
@@ -419,9 +420,11 @@ def cmd_train(args: argparse.Namespace) -> int:
         start = _check_init_table(args.init_qtable, store, args.log, env)
     else:
         start = RunFiles.check(env, store, args.log)
+        if start is not None:  # a warning (stderr, --quiet too) when the backup stands in
+            store.peek(warn=True)
     done = 0 if start is None else int(start.meta.get("episodes", 0))
     more = max(0, args.episodes - done)
-    say(_train_opening(args, env, start, done, more))
+    say(_train_opening(args, env, start, done, more, store.backup if fallbacks else None))
     if args.verbose:
         _print_configuration(args, env, say)
     if args.init_qtable:
@@ -471,6 +474,19 @@ def cmd_train(args: argparse.Namespace) -> int:
     return exit_status() if result.interrupted else 0
 
 
+def _warn_once(seen: list[str]):
+    """A table's warning function that prints each message once (to stderr: with
+    ``--quiet`` too) and keeps them in ``seen``: ``train`` warns of a fallback to the
+    backup before its first line, and the locked load that follows says it again."""
+
+    def warn(message: str) -> None:
+        if message not in seen:
+            seen.append(message)
+            print(f"warning: {message}", file=sys.stderr)
+
+    return warn
+
+
 def count(n: int, word: str) -> str:
     """``1 episode``, ``1500 episodes`` (no thousands separator: as the progress lines).
 
@@ -512,9 +528,12 @@ def describe_run(env) -> str:
     return f"arena {env.arena.name}, {goal}, {world}"
 
 
-def _train_opening(args: argparse.Namespace, env, start, done: int, more: int) -> str:
+def _train_opening(
+    args: argparse.Namespace, env, start, done: int, more: int, backup: Path | None = None
+) -> str:
     """``train``'s first line: the table it writes, new or resumed, and how many
-    episodes it adds (``--episodes`` is the total the table reaches)."""
+    episodes it adds (``--episodes`` is the total the table reaches); ``backup``: the
+    table's file is damaged or missing, and this backup holds the table."""
     log = f"; log {args.log}" if args.log else ""
     where = f"{describe_run(env)}, seed {args.seed}{log}"
     if args.init_qtable:
@@ -524,6 +543,8 @@ def _train_opening(args: argparse.Namespace, env, start, done: int, more: int) -
         )
     elif start is None:
         head = f"new table {args.qtable}"
+    elif backup is not None:
+        head = f"resuming {args.qtable} from its backup {backup}: {count(done, 'episode')} done"
     else:
         head = f"resuming {args.qtable}: {count(done, 'episode')} done"
     if more == 0 and start is None:
@@ -532,6 +553,13 @@ def _train_opening(args: argparse.Namespace, env, start, done: int, more: int) -
         return (
             f"{head}: nothing to train, --episodes {args.episodes} is the total and it "
             f"holds {done} already (give a larger --episodes to train further)"
+        )
+    if more == 0 and backup is not None:
+        return (
+            f"{args.qtable} is damaged or missing (see the warning); its backup {backup} "
+            f"already holds {count(done, 'episode')}, and --episodes {args.episodes} is the "
+            f"total to reach: nothing to train, nothing written ({args.qtable} is saved again "
+            "by the next run that trains: give a larger --episodes)"
         )
     if more == 0:
         return (

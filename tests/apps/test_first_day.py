@@ -289,3 +289,78 @@ def test_transfer_dumps_its_settings_only_with_verbose(here, capsys) -> None:
     assert not [ln for ln in dump if "None" in ln or "(default)" in ln]
     code, out, _ = run(capsys, *TRANSFER, "--out", "c", "--quiet", "--verbose")
     assert code == 0 and not out.startswith("transfer:")  # --quiet: the results only
+
+
+# -- warnings about the user's data: always, on stderr --------------------------------------------
+TRAIN_T = ["train", "--arena", "room", "--config", "tiny.yaml", "--qtable", "t.qtable"]
+
+
+@pytest.mark.parametrize("damage", ["torn", "missing"])
+@pytest.mark.parametrize("quiet", [[], ["--quiet"]])
+def test_nothing_to_train_from_a_backup_warns_and_says_the_backup_holds_them(
+    here, capsys, damage, quiet
+) -> None:
+    """The table's file torn or missing, its backup holding the episodes asked for: it
+    said ``t.qtable already holds 3 episodes`` (only the backup did), never warned, and
+    said nothing at all with --quiet."""
+    assert run(capsys, *TRAIN_T, "--episodes", "3", "--quiet")[0] == 0
+    assert run(capsys, *TRAIN_T, "--episodes", "4", "--quiet")[0] == 0  # backup: 3 episodes
+    table = here / "t.qtable"
+    if damage == "torn":
+        table.write_bytes(table.read_bytes()[:100])
+    else:
+        table.unlink()
+    before = {p.name: p.read_bytes() for p in here.iterdir() if p.is_file()}
+    code, out, err = run(capsys, *TRAIN_T, "--episodes", "3", *quiet)
+    assert code == 0
+    problem = "corrupt or truncated" if damage == "torn" else "missing"
+    assert err.count("\n") == 1 and err.startswith(f"warning: t.qtable: {problem}")
+    assert err.endswith("; using the backup t.qtable.bak\n")
+    if quiet:
+        assert out == ""
+    else:
+        assert out.startswith("t.qtable is damaged or missing (see the warning); its backup "
+                              "t.qtable.bak already holds 3 episodes")  # fmt: skip
+    assert {p.name: p.read_bytes() for p in here.iterdir() if p.is_file()} == before
+
+
+def test_a_run_that_trains_from_the_backup_warns_once_and_says_so_first(here, capsys) -> None:
+    assert run(capsys, *TRAIN_T, "--episodes", "2", "--quiet")[0] == 0
+    assert run(capsys, *TRAIN_T, "--episodes", "3", "--quiet")[0] == 0
+    (here / "t.qtable").write_bytes(b"torn")
+    code, out, err = run(capsys, *TRAIN_T, "--episodes", "4", "--log", "")
+    assert code == 0 and out.startswith("resuming t.qtable from its backup t.qtable.bak: 2 ")
+    assert err.count("using the backup t.qtable.bak") == 1  # the locked load does not repeat it
+    code, out, err = run(capsys, *TRAIN_T, "--episodes", "5", "--log", "", "--quiet")
+    assert code == 0 and out == "" and err == ""  # saved again: nothing to warn of
+
+
+def test_a_table_whose_dyna_model_is_bad_is_handled_like_a_torn_one(here, capsys) -> None:
+    """docs/robustness.md: ``eval`` (like ``train`` and ``view``) falls back to the backup
+    with a warning; ``export`` and ``--init-qtable`` read the file given and refuse it."""
+    from koolio_pymunk.learning.qtable import load_qtable
+
+    (here / "dyna.yaml").write_text(
+        "learner: {algorithm: dyna, planning_steps: 3}\nepisode: {max_steps: 30}\n"
+    )
+    dyna = ["--arena", "room", "--config", "dyna.yaml"]
+    assert run(capsys, "train", *dyna, "--qtable", "d.qtable", "--episodes", "2")[0] == 0
+    table = load_qtable(here / "d.qtable")
+    assert "dyna_model" in table.sections
+    table.sections["dyna_model"] = b"not a model"
+    (here / "d.qtable").write_bytes(table.to_bytes())  # a whole file, its model bad
+    code, out, err = run(capsys, "eval", *dyna, "--qtable", "d.qtable", "--episodes", "1")
+    assert code == 0 and out.startswith("greedy evaluation of d.qtable (1 episode,")
+    assert err == (
+        "warning: d.qtable: dyna_model: malformed Dyna-Q model; using the backup d.qtable.bak\n"
+    )
+    for argv in (
+        ["export", "--qtable", "d.qtable", "--config", "dyna.yaml", "--out", "p.json"],
+        ["train", *dyna, "--init-qtable", "d.qtable", "--qtable", "n.qtable", "--log", "n.csv"],
+    ):
+        code, out, err = run(capsys, *argv)
+        assert code == 2 and err == (
+            "koolio-pm: error: d.qtable: dyna_model: malformed Dyna-Q model\n"
+        )
+    text = (REPO / "docs" / "robustness.md").read_text()
+    assert "`train`, `eval` and `view` use its backup" in " ".join(text.split())
