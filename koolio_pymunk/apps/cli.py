@@ -27,7 +27,7 @@ from typing import NoReturn
 from .. import __version__
 from ..store.errors import KoolioError, located
 from ..store.interrupts import exit_status
-from .flags import MAX_EPISODES, episodes_type, float_type, int_type
+from .flags import MAX_EPISODES, episodes_type, file_name, float_type, int_type
 from .flags import seed_type as seed_type
 
 DEFAULT_QTABLE = "runs/hallway.qtable"
@@ -289,12 +289,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
 
     p = sub.add_parser("check-arena", help="validate an arena file")
-    p.add_argument("file", help="arena file or built-in name")
+    p.add_argument("file", type=file_name, help="arena file or built-in name")
     p.add_argument("--robot", default="koolio", help="robot profile for clearance checks")
 
     p = sub.add_parser("info", help="state-space sizes (paper §5.4.8) and table figures")
-    p.add_argument("--config", default=None, help="YAML configuration file")
-    p.add_argument("--qtable", default=None, help="also describe this Q-table file")
+    p.add_argument(
+        "--config", type=file_name, default=None, help="YAML configuration file or profile name"
+    )
+    p.add_argument("--qtable", type=file_name, default=None, help="also describe this Q-table file")
 
     for name, module in EXTRA_COMMANDS.items():
         mod = importlib.import_module(module)
@@ -416,7 +418,8 @@ def cmd_train(args: argparse.Namespace) -> int:
     checks = _eval_every_args(args)
     env = _make_env(args)
     say = (lambda s: None) if args.quiet else print
-    store = QTableStore(args.qtable, purpose="koolio-pm train")
+    fallbacks: list[str] = []  # the table's file damaged or missing: its backup is used
+    store = QTableStore(args.qtable, purpose="koolio-pm train", warn=_warn_once(fallbacks))
     # Everything that reading can check comes first: an error is the only line printed,
     # and no file (not even a lock file) is left behind.
     if args.robots > 1 and args.discard_unfinished:
@@ -425,9 +428,11 @@ def cmd_train(args: argparse.Namespace) -> int:
         start = _check_init_table(args.init_qtable, store, args.log, env)
     else:
         start = RunFiles.check(env, store, args.log)
+        if start is not None:  # a warning (stderr, --quiet too) when the backup stands in
+            store.peek(warn=True)
     done = 0 if start is None else int(start.meta.get("episodes", 0))
     more = max(0, args.episodes - done)
-    say(_train_opening(args, env, start, done, more))
+    say(_train_opening(args, env, start, done, more, store.backup if fallbacks else None))
     if args.verbose:
         _print_configuration(args, env, say)
     if args.init_qtable:
@@ -463,6 +468,19 @@ def cmd_train(args: argparse.Namespace) -> int:
     )
     say(f"score the greedy policy (no exploration): {eval_command(args)}")
     return exit_status() if result.interrupted else 0
+
+
+def _warn_once(seen: list[str]):
+    """A table's warning function that prints each message once (to stderr: with
+    ``--quiet`` too) and keeps them in ``seen``: ``train`` warns of a fallback to the
+    backup before its first line, and the locked load that follows says it again."""
+
+    def warn(message: str) -> None:
+        if message not in seen:
+            seen.append(message)
+            print(f"warning: {message}", file=sys.stderr)
+
+    return warn
 
 
 def count(n: int, word: str) -> str:
@@ -506,9 +524,12 @@ def describe_run(env) -> str:
     return f"arena {env.arena.name}, {goal}, {world}"
 
 
-def _train_opening(args: argparse.Namespace, env, start, done: int, more: int) -> str:
+def _train_opening(
+    args: argparse.Namespace, env, start, done: int, more: int, backup: Path | None = None
+) -> str:
     """``train``'s first line: the table it writes, new or resumed, and how many
-    episodes it adds (``--episodes`` is the total the table reaches)."""
+    episodes it adds (``--episodes`` is the total the table reaches); ``backup``: the
+    table's file is damaged or missing, and this backup holds the table."""
     log = f"; log {args.log}" if args.log else ""
     where = f"{describe_run(env)}, seed {args.seed}{log}"
     if args.init_qtable:
@@ -518,6 +539,8 @@ def _train_opening(args: argparse.Namespace, env, start, done: int, more: int) -
         )
     elif start is None:
         head = f"new table {args.qtable}"
+    elif backup is not None:
+        head = f"resuming {args.qtable} from its backup {backup}: {count(done, 'episode')} done"
     else:
         head = f"resuming {args.qtable}: {count(done, 'episode')} done"
     if more == 0 and start is None:
@@ -526,6 +549,13 @@ def _train_opening(args: argparse.Namespace, env, start, done: int, more: int) -
         return (
             f"{head}: nothing to train, --episodes {args.episodes} is the total and it "
             f"holds {done} already (give a larger --episodes to train further)"
+        )
+    if more == 0 and backup is not None:
+        return (
+            f"{args.qtable} is damaged or missing (see the warning); its backup {backup} "
+            f"already holds {count(done, 'episode')}, and --episodes {args.episodes} is the "
+            f"total to reach: nothing to train, nothing written ({args.qtable} is saved again "
+            "by the next run that trains: give a larger --episodes)"
         )
     if more == 0:
         return (
@@ -538,29 +568,89 @@ def _train_opening(args: argparse.Namespace, env, start, done: int, more: int) -
     return f"{head}, {more} more to reach --episodes {args.episodes}; {where}"
 
 
+def config_label(name: str | None, flag: str = "--config") -> str:
+    """A configuration (``--config``) or world (``--world``, ``--dr-world``) as it
+    resolved: the built-in defaults, the ideal world, a shipped profile or a file.
+
+    >>> config_label(None), config_label("paper"), config_label("my.yaml")
+    ('the built-in defaults (no --config)', 'profile paper', 'file my.yaml')
+    >>> config_label(None, "--world"), config_label("koolio-real", "--world")
+    ('ideal (nothing laid over the configuration)', 'world profile koolio-real')
+    """
+    from ..store.config import PROFILE_DIR, config_path
+
+    world = flag.endswith("world")
+    if name is None or (world and str(name) == "ideal"):
+        return (
+            "ideal (nothing laid over the configuration)"
+            if world
+            else (f"the built-in defaults (no {flag})")
+        )
+    path = config_path(name, flag)
+    if path.parent == PROFILE_DIR and path.stem == str(name):
+        return f"{'world ' if world else ''}profile {name}"
+    return f"file {path}"
+
+
+def goal_label(env, asked: str | None) -> str:
+    """The goal a run in ``env`` learns for, as it resolved (``asked``: ``--goal``)."""
+    if env.random_goal:
+        names = env.world_arena.goal_names()
+        return f"random: one of {len(names)} doors per episode ({', '.join(names)})"
+    where = f"{env.goal_name} at {env.world_arena.goal().at}"
+    return where + (" (the arena's active goal)" if asked is None else "")
+
+
 def _print_configuration(args: argparse.Namespace, env, say) -> None:
-    """``train --verbose``: the flags, the active goal and the whole configuration."""
+    """``train --verbose``: the run as it resolved (every default filled in, nothing
+    ``None``), then the whole configuration."""
+    every = args.save_every or args.robots
+    saves = "every episode" if every == 1 else f"every {count(every, 'episode')}"
+    if args.save_seconds is not None:
+        saves += f", and when {args.save_seconds:g} s passed since the last save"
+    exit_ = "discarded (Exit Without Save)" if args.discard_unfinished else "folded in (Exit)"
+    rows = [
+        ("arena", f"{env.arena.name} ({env.arena.source})"),
+        ("goal", goal_label(env, args.goal)),
+        ("episodes", f"{args.episodes} (the total the table reaches)"),
+        ("seed", args.seed),
+        ("qtable", args.qtable),
+        ("log", args.log or "none (--log '')"),
+        ("config", config_label(args.config)),
+        ("world", config_label(args.world, "--world")),
+        ("robots", args.robots),
+    ]
+    if args.init_qtable:
+        rows.append(("init-qtable", f"{args.init_qtable} (the new table starts from it)"))
+    if args.eval_every:
+        check = count(args.eval_episodes, "episode")
+        rows.append(("eval-every", f"a greedy check of {check} every {args.eval_every}"))
+    rows += [("saves", saves), ("on Ctrl-C", f"the unfinished episode is {exit_}")]
     say("koolio-pm train")
-    for key in (
-        "arena",
-        "goal",
-        "episodes",
-        "seed",
-        "qtable",
-        "log",
-        "config",
-        "world",
-        "robots",
-        "init_qtable",
-        "discard_unfinished",
-        "eval_every",
-        "eval_episodes",
-    ):
-        say(f"  {key}: {getattr(args, key)}")
-    say(f"  active goal: {env.goal_name} at {env.world_arena.goal().at}")
+    for key, value in rows:
+        say(f"  {key}: {value}")
     say("configuration:")
-    for line in env.config.to_yaml().splitlines():
+    for line in resolved_yaml(env.config).splitlines():
         say("  " + line)
+
+
+def resolved_yaml(cfg) -> str:
+    """``cfg`` as YAML with its values as they resolve: the fields whose ``None`` means
+    "another field's" (``robot.robot_radius``: the robot profile's radius;
+    ``realism.sonar.max_range``: ``sensors.sonar.max_range``) show that value.
+
+    >>> from koolio_pymunk.store.config import load_config
+    >>> "null" in resolved_yaml(load_config()), "null" in load_config().to_yaml()
+    (False, True)
+    """
+    from ..store.yamlfile import dump_yaml
+
+    data = cfg.to_dict()
+    data["robot"]["robot_radius"] = cfg.robot.radius
+    sonar = data.get("realism", {}).get("sonar", {})
+    if sonar.get("max_range", 0) is None:
+        sonar["max_range"] = cfg.sensors.sonar.max_range
+    return dump_yaml(data, sort_keys=False, default_flow_style=None)
 
 
 def _eval_every_args(args: argparse.Namespace) -> dict[str, int]:

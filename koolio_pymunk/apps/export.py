@@ -58,19 +58,24 @@ WRITTEN_BY = "koolio-pm export"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
+    from .flags import SEED_LIMIT, file_name, int_type
+
     p.add_argument(
         "--qtable",
+        type=file_name,
         default="runs/hallway.qtable",
         help="table to export: a .qtable file or a policy file (default runs/hallway.qtable)",
     )
     p.add_argument(
         "--out",
+        type=file_name,
         required=True,
         help="policy file to write (JSON; an earlier policy file is replaced, no other "
         "file); a name ending in .qtable writes the binary format to a new file",
     )
     p.add_argument(
         "--config",
+        type=file_name,
         default=None,
         help="YAML configuration or profile the table was learned with: its learner (alpha, "
         "gamma, epsilon, algorithm) and rewards go into the policy as the robot's defaults; "
@@ -79,11 +84,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--world",
+        type=file_name,
         default=None,
         help="the world (profile or file) the policy is meant for; recorded in the policy",
     )
-    from .flags import SEED_LIMIT, int_type
-
     p.add_argument(
         "--episode",
         type=int_type(0, SEED_LIMIT - 1),

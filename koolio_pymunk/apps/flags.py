@@ -107,6 +107,23 @@ def episodes_type(low: int = 0) -> Callable[[str], int]:
     return int_type(low, MAX_EPISODES)
 
 
+def file_name(text: str) -> str:
+    """The type of a flag that names a file or a folder: any name but an empty one
+    (``Path('')`` is the current folder: ``--out ''`` would write there, ``--script ''``
+    would be no script at all).
+
+    >>> file_name("runs/a.csv")
+    'runs/a.csv'
+    >>> file_name(" ")
+    Traceback (most recent call last):
+    ...
+    argparse.ArgumentTypeError: empty file name
+    """
+    if text.strip() == "":
+        raise argparse.ArgumentTypeError("empty file name")
+    return text
+
+
 def check_png(path: str | Path, item: str) -> None:
     """An image to write (``--screenshot``, ``plot --out``): a name ending in ``.png``
     that is not a folder; else :class:`KoolioError` (one line naming ``item``).
@@ -114,7 +131,12 @@ def check_png(path: str | Path, item: str) -> None:
     >>> check_png("notes.md", "--screenshot")
     Traceback (most recent call last):
     koolio_pymunk.store.errors.KoolioError: --screenshot: notes.md: must end in .png
+    >>> check_png("", "--screenshot")
+    Traceback (most recent call last):
+    koolio_pymunk.store.errors.KoolioError: --screenshot: empty file name
     """
+    if str(path).strip() == "":
+        raise KoolioError(f"{item}: empty file name")
     if not str(path).lower().endswith(".png"):
         raise KoolioError(f"{item}: {path}: must end in .png")
     if Path(path).is_dir():

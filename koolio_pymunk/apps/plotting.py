@@ -1,8 +1,9 @@
 """Plot the learning curve of a training log (return, outcomes, steps per episode).
 
-``koolio-pm plot --log runs/hallway.csv --out curve.png`` reads the per-episode CSV that
-``koolio-pm train`` and ``koolio-pm view`` append to (see :mod:`koolio_pymunk.learning.training`)
-and draws, against the episode number:
+``koolio-pm plot --log runs/hallway.csv`` reads the per-episode CSV that ``koolio-pm
+train`` and ``koolio-pm view`` append to (see :mod:`koolio_pymunk.learning.training`)
+and draws, against the episode number (``--x steps``: against the environment steps taken
+since the log's first row, the steps of ``interrupted`` rows included):
 
 1. the return of each episode (sum of its rewards) and its moving average -- the paper's
    "graph ... showing the growth of the return as the policy approaches optimal";
@@ -20,6 +21,15 @@ table is kept as the best table (``X.best.qtable``) as a gold star.
 again from its start when training resumes. Several logs (``--log a --log b``, or
 ``koolio-pm plot a.csv b.csv``) are overlaid to compare runs, one colour each: moving
 averages only, and of the outcomes only the share at the goal.
+
+**Episode numbers.** Episodes are numbered from 1, as everywhere people read them
+(``train``'s progress, the window, the checks of ``--eval-every``): the log's ``episode``
+column is 0-based (the episode's index, which seeds it), so its row ``episode = k`` is
+drawn at episode ``k + 1``, and a check after N episodes at N.
+
+**Where the picture goes.** ``--out PNG``; without it, beside the log and named after it
+(:func:`default_out`: ``runs/hallway.csv`` -> ``runs/hallway.png``; several logs:
+``runs/a.compared.png`` beside the first). The command's line names the file it wrote.
 
 matplotlib (Agg backend, no display) is imported only when the command runs.
 """
@@ -61,9 +71,26 @@ class Log:
     extra: dict = field(default_factory=dict)
     evals: Evals | None = None
     """The run's greedy checks (``train --eval-every``), when it has some."""
+    steps_done: np.ndarray | None = None
+    """Environment steps from the log's first row to the end of each finished episode
+    (``interrupted`` rows' steps included: they were taken); None: the sum of ``steps``."""
 
     def __len__(self) -> int:
         return len(self.episode)
+
+    def x(self, axis: str = "episodes") -> np.ndarray:
+        """Each finished episode's place on the x axis: its number from 1 (``episodes``)
+        or the environment steps taken up to its end (``steps``)."""
+        if axis == "steps":
+            done = self.steps_done
+            return np.cumsum(self.steps) if done is None else done
+        return self.episode + 1
+
+    def check_x(self, ev: Evals, axis: str = "episodes") -> np.ndarray:
+        """The x of each greedy check (made after ``ev.episode`` episodes)."""
+        if axis != "steps":
+            return ev.episode
+        return np.interp(ev.episode, self.episode + 1, self.x("steps"))
 
 
 @dataclass
@@ -125,13 +152,17 @@ def read_log(path: str | Path) -> Log:
     cols: dict[str, list] = {k: [] for k in ("episode", "reward", "steps", "bumps", "epsilon")}
     outcomes: list[str] = []
     skipped = 0
+    steps_done: list[int] = []
+    taken = 0
     for line, text_line in enumerate(lines[1:], start=2):
         if not text_line.strip():
             continue
         row = dict(zip(fieldnames, csv_fields(source, line, text_line)))
+        taken += _field(row, "steps", int, source, line)
         if row.get("outcome") == "interrupted":
             skipped += 1
             continue
+        steps_done.append(taken)
         cols["episode"].append(_field(row, "episode", int, source, line))
         cols["reward"].append(_field(row, "reward", float, source, line))
         cols["steps"].append(_field(row, "steps", int, source, line))
@@ -149,6 +180,7 @@ def read_log(path: str | Path) -> Log:
         outcomes,
         np.asarray(cols["epsilon"], dtype=float),
         skipped,
+        steps_done=np.asarray(steps_done, dtype=float),
     )
 
 
@@ -243,11 +275,33 @@ def run_labels(logs: list[Log]) -> list[str]:
     return [str(log.path) for log in logs]
 
 
-def plot_logs(logs: list[Log], out: str | Path, window: int = 50, title: str | None = None) -> Path:
-    """Draw the learning curve of ``logs`` into the PNG ``out`` (written atomically)."""
+def default_out(logs: list[str | Path]) -> Path:
+    """``plot``'s picture when no ``--out`` is given: beside the first log, named after
+    it (the name of several logs' comparison says so; a log whose name ends in ``.png``
+    keeps it, so its picture is never the log itself).
+
+    >>> [str(default_out(logs)) for logs in (["runs/hallway.csv"], ["a/x.csv", "b/y.csv"])]
+    ['runs/hallway.png', 'a/x.compared.png']
+    >>> str(default_out(["odd.png"]))
+    'odd.png.png'
+    """
+    first = Path(logs[0])
+    stem = first.name if first.suffix.lower() == ".png" else first.stem
+    return first.with_name(stem + (".compared.png" if len(logs) > 1 else ".png"))
+
+
+def plot_logs(
+    logs: list[Log],
+    out: str | Path,
+    window: int = 50,
+    title: str | None = None,
+    x: str = "episodes",
+) -> Path:
+    """Draw the learning curve of ``logs`` into the PNG ``out`` (written atomically),
+    against episodes or environment steps (``x``: :data:`X_AXES`)."""
     import matplotlib.pyplot as plt
 
-    fig = make_figure(logs, window, title)
+    fig = make_figure(logs, window, title, x)
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110)
     plt.close(fig)
@@ -256,13 +310,23 @@ def plot_logs(logs: list[Log], out: str | Path, window: int = 50, title: str | N
     return out
 
 
-def make_figure(logs: list[Log], window: int = 50, title: str | None = None):
+#: ``plot --x``: what the x axis counts, and its caption.
+X_AXES = {
+    "episodes": "episode (numbered from 1)",
+    "steps": "environment steps (from the log's first row)",
+}
+
+
+def make_figure(logs: list[Log], window: int = 50, title: str | None = None, x: str = "episodes"):
     """The learning-curve figure of ``logs`` (matplotlib, Agg), three panels.
 
     One log: return and its moving average; the shares of the last ``window`` episodes at
     the goal, off the end of the world and at the step cap, with epsilon; steps and bumps
     per episode. Several logs: the same panels with one colour per run, moving averages
-    only, and only the share at the goal (the panel says so)."""
+    only, and only the share at the goal (the panel says so). ``x``: the x axis counts
+    episodes (from 1) or environment steps (:data:`X_AXES`)."""
+    if x not in X_AXES:
+        raise KoolioError(f"--x: {x!r}: not one of {', '.join(X_AXES)}")
     import matplotlib
 
     matplotlib.use("Agg")
@@ -274,14 +338,14 @@ def make_figure(logs: list[Log], window: int = 50, title: str | None = None):
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     names = run_labels(logs)
     if len(logs) == 1:
-        extra = _plot_single(axes, logs[0], window)
+        extra = _plot_single(axes, logs[0], window, x)
     else:
-        extra = _plot_several(axes, logs, names, window, colours)
+        extra = _plot_several(axes, logs, names, window, colours, x)
     ax_ret.set_ylabel("return per episode\n(sum of rewards)")
     ax_out.set_ylim(-2, 102)
-    ax_steps.set_xlabel("episode")
+    ax_steps.set_xlabel(X_AXES[x])
     ax_steps.xaxis.set_major_locator(MaxNLocator(integer=True))
-    _short_axes(axes, logs)
+    _short_axes(axes, logs, x)
     for ax in axes:
         ax.grid(True, alpha=0.3)
         handles, _ = ax.get_legend_handles_labels()
@@ -300,15 +364,18 @@ def make_figure(logs: list[Log], window: int = 50, title: str | None = None):
     return fig
 
 
-def _short_axes(axes, logs: list[Log]) -> None:
+def _short_axes(axes, logs: list[Log], axis: str = "episodes") -> None:
     """Logs of a single episode: an episode axis one episode wider on each side (whole
-    episodes as ticks, not 0.945 to 1.05), and return and step axes that reach zero (not
-    45 to 47 steps around one dot)."""
+    episodes as ticks, not 0.945 to 1.05; a steps axis from 0), and return and step axes
+    that reach zero (not 45 to 47 steps around one dot)."""
     ax_ret, _, ax_steps = axes
     if any(len(log) > 1 for log in logs) or not any(len(log) for log in logs):
         return
-    x = [int(log.episode[0]) + 1 for log in logs if len(log)]
-    ax_steps.set_xlim(min(x) - 1, max(x) + 1)
+    x = [float(log.x(axis)[0]) for log in logs if len(log)]
+    if axis == "steps":
+        ax_steps.set_xlim(0, max(x) * 1.1 + 1)
+    else:
+        ax_steps.set_xlim(min(x) - 1, max(x) + 1)
     for ax, values in (
         (ax_ret, [float(log.reward[0]) for log in logs if len(log)]),
         (ax_steps, [float(log.steps[0]) for log in logs if len(log)]),
@@ -334,10 +401,10 @@ def _title(logs: list[Log], names: list[str]) -> str:
     return f"Learning curve: {first.path.name} ({_count(len(first), 'episode')}{extra})"
 
 
-def _plot_single(axes, log: Log, window: int) -> dict:
+def _plot_single(axes, log: Log, window: int, axis: str = "episodes") -> dict:
     """One run: every panel in full. Returns extra legend handles per axis."""
     ax_ret, ax_out, ax_steps = axes
-    x = log.episode + 1
+    x = log.x(axis)
     dots = _dots(log)
     ax_ret.plot(x, log.reward, color="tab:blue", alpha=0.3, lw=0.8, label="return")
     ax_ret.plot(
@@ -380,16 +447,20 @@ def _plot_single(axes, log: Log, window: int) -> dict:
     )
     bumps.set_ylim(bottom=0)
     if log.evals is not None:
-        _draw_checks(ax_ret, ax_out, log.evals, "black")
+        _draw_checks(ax_ret, ax_out, log.evals, "black", x=log.check_x(log.evals, axis))
     return {ax_out: [line], ax_steps: [b]}
 
 
-def _draw_checks(ax_ret, ax_out, ev: Evals, colour: str, labels: bool = True) -> None:
+def _draw_checks(
+    ax_ret, ax_out, ev: Evals, colour: str, labels: bool = True, x: np.ndarray | None = None
+) -> None:
     """The greedy checks: goal rate on the outcomes panel, mean return on the return
-    panel, the kept best table's check as a gold star on both."""
+    panel, the kept best table's check as a gold star on both (at ``x``: default their
+    episode counts)."""
+    x = ev.episode if x is None else x
     m = int(ev.eval_episodes[-1])
     ax_out.plot(
-        ev.episode,
+        x,
         100.0 * ev.goal_rate,
         color=colour,
         marker="D",
@@ -399,7 +470,7 @@ def _draw_checks(ax_ret, ax_out, ev: Evals, colour: str, labels: bool = True) ->
         label=f"greedy check, at the goal ({m} episodes)" if labels else None,
     )
     ax_ret.plot(
-        ev.episode,
+        x,
         ev.mean_return,
         color=colour,
         marker="D",
@@ -413,18 +484,20 @@ def _draw_checks(ax_ret, ax_out, ev: Evals, colour: str, labels: bool = True) ->
         return
     star = {"marker": "*", "ms": 16, "color": "gold", "mec": "black", "mew": 1.0, "zorder": 5}
     text = f"kept best: {ev.goal_rate[k]:.0%} at episode {ev.episode[k]}"
-    ax_out.plot([ev.episode[k]], [100.0 * ev.goal_rate[k]], ls="", **star,
+    ax_out.plot([x[k]], [100.0 * ev.goal_rate[k]], ls="", **star,
                 label=text if labels else None)  # fmt: skip
-    ax_ret.plot([ev.episode[k]], [ev.mean_return[k]], ls="", **star)
+    ax_ret.plot([x[k]], [ev.mean_return[k]], ls="", **star)
 
 
-def _plot_several(axes, logs: list[Log], names: list[str], window: int, colours) -> dict:
+def _plot_several(
+    axes, logs: list[Log], names: list[str], window: int, colours, axis: str = "episodes"
+) -> dict:
     """Several runs, one colour each: moving averages of the return, the share at the
     goal, steps (solid) and bumps (dashed, right axis)."""
     ax_ret, ax_out, ax_steps = axes
     bumps = _bumps_axis(ax_steps)
     for i, (log, name) in enumerate(zip(logs, names)):
-        x, colour, dots = log.episode + 1, colours[i % len(colours)], _dots(log)
+        x, colour, dots = log.x(axis), colours[i % len(colours)], _dots(log)
         ret = moving_average(log.reward, window)
         ax_ret.plot(x, ret, color=colour, lw=2.2, label=name, **dots)
         rate = 100.0 * outcome_rate(log.outcome, "goal", window)
@@ -433,7 +506,8 @@ def _plot_several(axes, logs: list[Log], names: list[str], window: int, colours)
         ax_steps.plot(x, steps, color=colour, lw=2.2, label=name, **dots)
         bumps.plot(x, moving_average(log.bumps, window), color=colour, lw=1.4, ls="--", **dots)
         if log.evals is not None:
-            _draw_checks(ax_ret, ax_out, log.evals, colour, labels=False)
+            x_checks = log.check_x(log.evals, axis)
+            _draw_checks(ax_ret, ax_out, log.evals, colour, labels=False, x=x_checks)
     bumps.set_ylim(bottom=0)
     checks = any(log.evals is not None for log in logs)
     ax_ret.set_title(
@@ -472,19 +546,36 @@ def _window_type(text: str) -> int:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
+    from .flags import file_name
+
     p.add_argument(
         "logs",
         nargs="*",
+        type=file_name,
         metavar="LOG",
         help="training log CSV files (the same as --log LOG)",
     )
     p.add_argument(
         "--log",
         action="append",
+        type=file_name,
         default=None,
         help="training log CSV (default runs/hallway.csv); repeat to compare runs",
     )
-    p.add_argument("--out", default="curve.png", help="PNG to write (default curve.png)")
+    p.add_argument(
+        "--out",
+        type=file_name,
+        default=None,
+        help="PNG to write (default: beside the first log, named after it: runs/hallway.csv "
+        "-> runs/hallway.png; several logs: runs/a.compared.png)",
+    )
+    p.add_argument(
+        "--x",
+        choices=tuple(X_AXES),
+        default="episodes",
+        help="what the x axis counts: episodes (numbered from 1; the default) or the "
+        "environment steps taken since the log's first row",
+    )
     p.add_argument(
         "--window",
         type=_window_type,
@@ -495,6 +586,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--evals",
         action="append",
+        type=file_name,
         default=None,
         metavar="FILE",
         help="greedy checks of train --eval-every to draw, one per log in order (default: "
@@ -509,16 +601,26 @@ def run(args: argparse.Namespace) -> int:
 
     if args.window < 1:
         raise KoolioError(f"--window: must be >= 1, got {args.window}")
-    check_png(args.out, "--out")
     paths = [*args.logs, *(args.log or [])] or [DEFAULT_LOG]
+    out = Path(args.out) if args.out is not None else default_out(paths)
+    check_png(out, "--out")
     logs = [read_log(p) for p in paths]
     attach_evals(logs, args.evals)
-    out = plot_logs(logs, args.out, args.window, args.title)
+    _not_an_input(out, logs)
+    out = plot_logs(logs, out, args.window, args.title, args.x)
     n = sum(len(log) for log in logs)
     checks = sum(len(log.evals) for log in logs if log.evals is not None)
     also = f" and {_count(checks, 'greedy check')}" if checks else ""
     print(f"plot: {_count(n, 'episode')}{also} from {len(logs)} log(s) -> {out}")
     return 0
+
+
+def _not_an_input(out: Path, logs: list[Log]) -> None:
+    """Refuse a picture that would replace one of the files it is drawn from."""
+    inputs = [log.path for log in logs] + [log.evals.path for log in logs if log.evals]
+    for p in inputs:
+        if out.resolve() == p.resolve():
+            raise KoolioError(f"--out: {out}: is {p}, a file being plotted: choose another name")
 
 
 def attach_evals(logs: list[Log], named: list[str] | None) -> None:

@@ -154,9 +154,12 @@ MAX_RUN_FILE_BYTES = 64 * 1024 * 1024
 
 # --- command line ---------------------------------------------------------------------
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("spec", help="sweep spec (YAML; see docs/sweeps.md)")
-    p.add_argument("--out", default=None, help="output folder (default sweeps/<spec name>)")
-    from .flags import int_type
+    from .flags import file_name, int_type
+
+    p.add_argument("spec", type=file_name, help="sweep spec (YAML; see docs/sweeps.md)")
+    p.add_argument(
+        "--out", type=file_name, default=None, help="output folder (default sweeps/<spec name>)"
+    )
 
     p.add_argument(
         "--workers",
@@ -176,6 +179,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--world",
+        type=file_name,
         default=None,
         help="world profile or file laid over every run (overrides the spec's world)",
     )

@@ -501,6 +501,64 @@ def _plain(v: Any) -> Any:
     return list(v) if isinstance(v, tuple) else v
 
 
+def opening_line(cfg: TransferConfig, out: Path) -> str:
+    """``transfer``'s first line: what it trains or loads, where the robot learns, the
+    output folder."""
+    loaded = [s for s in SOURCES if cfg.table_file(s, cfg.seeds[0]) is not None]
+    tables = "tables" if not loaded else f"tables ({', '.join(loaded)} loaded)"
+    seeds = ", ".join(str(s) for s in cfg.seeds)
+    return (
+        f"transfer: seed{'s' if len(cfg.seeds) > 1 else ''} {seeds}: {tables} from the ideal "
+        f"world and {cfg.dr_world}, each handed to the robot in {cfg.world} for "
+        f"{cfg.robot_episodes} episodes; -> {out} (--verbose: every setting)"
+    )
+
+
+def settings(cfg: TransferConfig, out: Path) -> list[tuple[str, str]]:
+    """``transfer --verbose``: every setting as it resolved (a default named by its
+    value, never ``None``)."""
+    from .cli import config_label, count, goal_label
+
+    env = make_env(cfg, None)
+    learner = env.config.learner
+
+    def table(source: str) -> str:
+        given = cfg.table_file(source, cfg.seeds[0])
+        world = "the ideal world" if source == "ideal" else cfg.dr_world
+        if given is None:
+            return f"trained for {cfg.episodes} episodes in {world} (seed-S/{source}.qtable)"
+        return f"loaded from {cfg.qtable if source == 'ideal' else cfg.dr_qtable}"
+
+    alpha = cfg.robot_alpha
+    epsilon = cfg.robot_epsilon
+    trained_eps = learner.epsilon.at(cfg.episodes)
+    return [
+        ("arena", f"{env.arena.name} ({env.arena.source})"),
+        ("config", config_label(cfg.config)),
+        ("goal", goal_label(env, cfg.goal)),
+        ("world (the robot's)", config_label(cfg.world, "--world")),
+        ("dr-world", config_label(cfg.dr_world, "--dr-world")),
+        ("seeds", ", ".join(str(s) for s in cfg.seeds)),
+        ("ideal table", table("ideal")),
+        ("dr table", table("dr")),
+        ("robot episodes", str(cfg.robot_episodes)),
+        (
+            "greedy checks",
+            f"{count(cfg.eval_episodes, 'episode')} every {count(cfg.eval_every, 'robot episode')}",
+        ),
+        ("target", f"{cfg.target:g} (greedy goal rate counted as recovered)"),
+        ("robot alpha", f"{alpha:g}" if alpha is not None else f"{learner.alpha:g} (config's)"),
+        (
+            "robot epsilon",
+            f"{epsilon:g}"
+            if epsilon is not None
+            else f"the schedule's at the table's episode count ({trained_eps:g} after "
+            f"{cfg.episodes})",
+        ),
+        ("out", str(out)),
+    ]
+
+
 def check_output(out: Path) -> None:
     """Refuse an output folder that holds anything (never overwrite an earlier run)."""
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
@@ -700,20 +758,24 @@ def plot_or_note(result: dict[str, Any], out: Path, say: Report) -> None:
 
 # -- command line ------------------------------------------------------------------------------
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from .flags import MAX_EPISODES, float_type, int_type, seed_type
+    from .flags import MAX_EPISODES, file_name, float_type, int_type, seed_type
 
     d = TransferConfig()
     episodes, probability = int_type(0, MAX_EPISODES), float_type(0.0, 1.0)
-    p.add_argument("--arena", default=d.arena, help="arena file or built-in name")
-    p.add_argument("--config", default=None, help="YAML configuration file or profile name")
+    p.add_argument("--arena", type=file_name, default=d.arena, help="arena file or built-in name")
+    p.add_argument(
+        "--config", type=file_name, default=None, help="YAML configuration file or profile name"
+    )
     p.add_argument("--goal", default=None, help="goal (door) name (default: the arena's)")
     p.add_argument(
         "--world",
+        type=file_name,
         default=d.world,
         help=f"the realistic world standing in for the robot (default {d.world})",
     )
     p.add_argument(
         "--dr-world",
+        type=file_name,
         default=d.dr_world,
         help=f"world of the domain-randomized training (default {d.dr_world})",
     )
@@ -732,11 +794,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--qtable",
+        type=file_name,
         default=None,
         help="load the ideal-world table instead of training ({seed}: the run seed)",
     )
     p.add_argument(
-        "--dr-qtable", default=None, help="load the randomized table instead of training"
+        "--dr-qtable",
+        type=file_name,
+        default=None,
+        help="load the randomized table instead of training",
     )
     p.add_argument(
         "--robot-episodes",
@@ -776,10 +842,18 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "episode count)",
     )
     p.add_argument(
-        "--out", default="runs/transfer", help="new or empty output folder (default runs/transfer)"
+        "--out",
+        type=file_name,
+        default="runs/transfer",
+        help="new or empty output folder (default runs/transfer)",
     )
     p.add_argument("--no-plot", action="store_true", help="do not draw transfer.png")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
+    p.add_argument(
+        "--verbose",
+        action="store_true",
+        help="also print the experiment's settings as they resolved, before it starts",
+    )
 
 
 def config_from_args(args: argparse.Namespace) -> TransferConfig:
@@ -806,12 +880,12 @@ def run(args: argparse.Namespace) -> int:
     cfg = config_from_args(args)
     out = Path(args.out)
     say: Report | None = None if args.quiet else print
+    preflight(cfg, out)  # an error is the only line printed
     if say is not None:
-        say("koolio-pm transfer")
-        for f in fields(cfg):
-            value = _plain(getattr(cfg, f.name))
-            say(f"  {f.name}: {'(default)' if value is None else value}")
-        say(f"  out: {out}")
+        say(opening_line(cfg, out))
+        if args.verbose:
+            for key, value in settings(cfg, out):
+                say(f"  {key}: {value}")
     result = run_transfer(cfg, out, say).as_dict()
     for line in table_lines(result):
         print(line)

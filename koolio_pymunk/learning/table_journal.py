@@ -27,12 +27,12 @@ loads, and the table file is only ever replaced durably).
       uint32 crc32          of body_length and body
 
 A rows record sets the ``n`` rows (in key order) to those values and the table's episode
-count to ``episodes``; a whole record replaces the table. Replay stops at the first record that is cut short or fails its CRC (a
-process killed in the middle of an append, or a power loss): every record before it is
-applied. A journal of another snapshot (a crash between a snapshot and the journal's
-removal) is ignored: the snapshot already holds it. A record whose CRC holds but whose
-rows are not the table's (a key beyond the layout, a value that is not finite) is
-refused like a bad table.
+count to ``episodes``; a whole record replaces the table. Replay stops at the first record
+that is cut short or fails its CRC (a process killed in the middle of an append, or a
+power loss): every record before it is applied. A journal of another snapshot (a crash
+between a snapshot and the journal's removal) is ignored: the snapshot already holds it.
+A record whose CRC holds but whose rows are not the table's (a key beyond the layout, a
+value that is not finite) is refused like a bad table.
 
 >>> base = b"a snapshot's bytes, its CRC last"
 >>> data = header(base) + record(3, np.array([5]), np.array([[1.0, 2.0, 3.0, 4.0, 5.0]]))

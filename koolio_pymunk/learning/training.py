@@ -60,7 +60,19 @@ CHECKPOINT_SECONDS = 1.0
 
 @dataclass
 class Progress:
-    """Running figures of a training run, printed as progress lines."""
+    """Running figures of a training run, printed as progress lines.
+
+    The line ends with the time left (``eta 0:12``) at the rate of the recent episodes
+    (those of the moving window, so a run that speeds up as the robot learns is not
+    judged by its slow start). ``clock`` times the episode ends (a test gives its own):
+
+    >>> ticks = iter([10.0, 20.0, 30.0])
+    >>> p = Progress(started=0.0, clock=lambda: next(ticks))
+    >>> for _ in range(3):
+    ...     p.add(EpisodeResult(0, 0.0, 100, 0, "goal", False, 0.1, "201"))
+    >>> p.line(3, 9, 0.1).split("  ")[-1], p.eta_seconds(6)
+    ('eta 1:00', 60.0)
+    """
 
     window: int = 100
     recent: deque = field(default_factory=lambda: deque(maxlen=100))
@@ -68,6 +80,9 @@ class Progress:
     goals: int = 0
     steps: int = 0
     started: float = field(default_factory=time.perf_counter)
+    clock: Callable[[], float] = field(default=time.perf_counter, repr=False)
+    ends: deque = field(default_factory=lambda: deque(maxlen=101), repr=False)
+    """When the recent episodes ended (``clock``): the rate of the last ``window``."""
 
     def add(self, r: EpisodeResult) -> None:
         """Count a finished episode."""
@@ -75,6 +90,20 @@ class Progress:
         self.goals += r.outcome == "goal"
         self.steps += r.steps
         self.recent.append(r.outcome == "goal")
+        self.ends.append(self.clock())
+
+    def eta_seconds(self, remaining: int) -> float | None:
+        """Seconds ``remaining`` more episodes take at the recent rate (None: no episode
+        has ended yet, so there is no rate)."""
+        if remaining <= 0:
+            return 0.0
+        if not self.ends:
+            return None
+        if len(self.ends) >= 2:
+            span, n = self.ends[-1] - self.ends[0], len(self.ends) - 1
+        else:
+            span, n = self.ends[0] - self.started, 1
+        return remaining * max(0.0, span) / n
 
     @property
     def goal_rate(self) -> float:
@@ -87,11 +116,25 @@ class Progress:
         return self.steps / max(1e-9, time.perf_counter() - self.started)
 
     def line(self, episode: int, total: int, epsilon: float) -> str:
-        """The progress line printed every few seconds."""
+        """The progress line printed every few seconds (``episode`` done of ``total``)."""
         return (
             f"episode {episode:>6}/{total}  goal rate (last {len(self.recent)}) "
             f"{self.goal_rate:6.1%}  steps/s {self.steps_per_s:8.0f}  epsilon {epsilon:.3f}"
+            f"  eta {clock_time(self.eta_seconds(total - episode))}"
         )
+
+
+def clock_time(seconds: float | None) -> str:
+    """``0:07``, ``12:30``, ``1:02:03`` (``-:--`` when unknown), as a clock shows it.
+
+    >>> clock_time(7.4), clock_time(750), clock_time(3723), clock_time(None)
+    ('0:07', '12:30', '1:02:03', '-:--')
+    """
+    if seconds is None or seconds != seconds or seconds == float("inf"):
+        return "-:--"
+    s = round(seconds)
+    h, m = s // 3600, s // 60 % 60
+    return f"{h}:{m:02d}:{s % 60:02d}" if h else f"{m}:{s % 60:02d}"
 
 
 def run_record(env: KoolioEnv) -> dict[str, str]:

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 import pygame
 
 from ..world.physics import ACTION_NAMES
+from .display import init_display
 from .drawing import (
     BACKGROUND,
     ROBOT_NORMAL,
@@ -233,7 +234,7 @@ class EnvRenderer:
             return pygame.surfarray.array3d(surf).transpose(1, 0, 2).copy()
         if mode == "human":
             if self._window is None:
-                pygame.display.init()
+                init_display()  # without libwayland's line on a machine with no display
                 self._window = pygame.display.set_mode(self.size)
                 pygame.display.set_caption("Koolio (pymunk)")
                 self._clock = pygame.time.Clock()

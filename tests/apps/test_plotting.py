@@ -219,3 +219,70 @@ def test_evals_flag_and_bad_evals_files(tmp_path, capsys) -> None:
     other.write_text(EVALS + "10,20,0,lots,0,0,0,5,1,-3,1,0.1\n")
     assert main(["plot", str(log), "--evals", str(other), "--out", out]) == 2
     assert "line 2: goal_rate: not a number" in capsys.readouterr().err
+
+
+def test_plot_without_out_writes_beside_the_log_and_says_where(tmp_path, capsys, monkeypatch):
+    """The README's flow (``plot --log runs/hallway.csv``) leaves no ``curve.png`` in the
+    current folder: the picture goes beside the log, and the command's line names it."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "runs").mkdir()
+    write_log(tmp_path / "runs" / "hallway.csv", 12)
+    write_log(tmp_path / "runs" / "other.csv", 12)
+    assert main(["plot", "--log", "runs/hallway.csv"]) == 0
+    assert capsys.readouterr().out.strip().endswith("-> runs/hallway.png")
+    assert main(["plot", "runs/hallway.csv", "runs/other.csv"]) == 0
+    assert capsys.readouterr().out.strip().endswith("-> runs/hallway.compared.png")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["runs"]
+    assert (tmp_path / "runs" / "hallway.png").stat().st_size > 10_000
+    assert (tmp_path / "runs" / "hallway.compared.png").stat().st_size > 10_000
+
+
+def test_plot_never_draws_over_a_file_it_reads(tmp_path, capsys) -> None:
+    log = tmp_path / "odd.png"  # a log by an odd name: its picture is odd.png.png
+    write_log(log, 5)
+    before = log.read_bytes()
+    assert main(["plot", str(log), "--out", str(log)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "a file being plotted" in err
+    assert main(["plot", str(log)]) == 0
+    assert log.read_bytes() == before and (tmp_path / "odd.png.png").exists()
+
+
+def test_x_steps_draws_against_the_steps_taken_interrupted_ones_included(tmp_path) -> None:
+    """``--x steps``: each episode at the environment steps taken up to its end, counted
+    from the log's first row; an ``interrupted`` row is not drawn but its steps were taken;
+    the greedy checks sit at the steps of the episode they followed."""
+    import matplotlib.pyplot as plt
+
+    from koolio_pymunk.apps.plotting import attach_evals, evals_beside, make_figure
+
+    log = tmp_path / "t.csv"
+    log.write_text(
+        HEADER
+        + "0,-10,100,0,end_of_world,0,0.1,311\n"
+        + "1,-3,7,0,interrupted,0,0.1,311\n"  # Ctrl-C: 7 steps, the episode run again
+        + "1,-5,50,1,goal,0,0.1,311\n"
+        + "2,-1,20,0,goal,0,0.1,311\n"
+    )
+    evals_beside(log).write_text(EVALS + "2,20,0,0.5,0.5,0,0,50,1,-3,1,0.1\n")
+    logs = [read_log(log)]
+    attach_evals(logs, None)
+    for axis, xs, check in (("episodes", [1, 2, 3], [2]), ("steps", [100, 157, 177], [157])):
+        fig = make_figure(logs, 2, x=axis)
+        ax_ret, ax_out, ax_steps = fig.axes[:3]
+        assert ax_ret.get_lines()[0].get_xdata().tolist() == xs
+        diamonds = [ln for ln in ax_out.get_lines() if ln.get_marker() == "D"]
+        assert diamonds[0].get_xdata().tolist() == check
+        assert ax_steps.get_xlabel().startswith("episode" if axis == "episodes" else "environment")
+        plt.close(fig)
+
+
+def test_x_flag_on_the_command_line(tmp_path, capsys) -> None:
+    log = tmp_path / "t.csv"
+    write_log(log, 20)
+    assert main(["plot", str(log), "--x", "steps", "--out", str(tmp_path / "s.png")]) == 0
+    assert (tmp_path / "s.png").stat().st_size > 10_000
+    capsys.readouterr()
+    assert main(["plot", str(log), "--x", "time"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--x: invalid choice: 'time'" in err

@@ -25,6 +25,7 @@ import pygame_gui
 from ...store.config import Config
 from ...store.errors import KoolioError
 from ...store.files import atomic_write, check_path
+from ...task.display import init_display
 from ...world.arena import Point
 from ..flags import check_png
 from . import dialogs, items, limits, view
@@ -83,7 +84,7 @@ class EditorApp:
         size: tuple[int, int] = (1280, 720),
         config: Config | None = None,
     ) -> None:
-        pygame.display.init()
+        init_display()  # without libwayland's XDG_RUNTIME_DIR line (task/display.py)
         pygame.font.init()
         pygame.display.set_caption("koolio arena editor")
         self.screen = pygame.display.set_mode(size)

@@ -24,12 +24,22 @@ import argparse
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """The editor's flags."""
-    p.add_argument("file", nargs="?", help="arena file to open (or a built-in name)")
+    from ..flags import file_name
+
+    p.add_argument(
+        "file", nargs="?", type=file_name, help="arena file to open (or a built-in name)"
+    )
     p.add_argument("--new", action="store_true", help="start a new arena (saved to FILE)")
-    p.add_argument("--doors", metavar="TABLE", help="start from a door table (hallway)")
-    p.add_argument("--script", metavar="FILE", help="run a scripted session, then exit")
+    p.add_argument(
+        "--doors", type=file_name, metavar="TABLE", help="start from a door table (hallway)"
+    )
+    p.add_argument(
+        "--script", type=file_name, metavar="FILE", help="run a scripted session, then exit"
+    )
     p.add_argument("--stay", action="store_true", help="stay open after --script")
-    p.add_argument("--screenshot", metavar="PNG", help="save a screenshot at the end, exit")
+    p.add_argument(
+        "--screenshot", type=file_name, metavar="PNG", help="save a screenshot at the end, exit"
+    )
     p.add_argument(
         "--size",
         default="1280x720",
@@ -42,7 +52,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="grid and snap step, inches (default 24: a tile; 1 to 1000)",
     )
     p.add_argument("--robot", default="koolio", help="robot profile for clearance checks")
-    p.add_argument("--config", help="configuration file for the test drive")
+    p.add_argument("--config", type=file_name, help="configuration file for the test drive")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -17,6 +17,7 @@ import pygame
 
 from ...store.config import ROBOT_PROFILES, load_config
 from ...store.errors import KoolioError
+from ...task.display import headless, no_display
 from ..flags import check_png
 from . import limits
 from .app import EditorApp
@@ -74,13 +75,30 @@ def make_model(args: argparse.Namespace) -> EditorModel:
     return EditorModel.from_file(arena_path(args.file), **kw)
 
 
+def by_hand(args: argparse.Namespace) -> bool:
+    """True when ``koolio-pm edit`` waits for a person: no ``--script`` and no
+    ``--screenshot`` (which save and exit), or ``--stay``."""
+    return (not args.script and not args.screenshot) or args.stay
+
+
+def check_display(args: argparse.Namespace) -> None:
+    """Refuse in one line to open the editor for a person on a display nobody sees
+    (``SDL_VIDEODRIVER=dummy``, or no display at all): it would wait for ever."""
+    if by_hand(args) and headless():
+        how = "give --script FILE (and --screenshot PNG to see the result)"
+        if args.stay:
+            how = "leave out --stay"
+        raise KoolioError(f"edit: headless ({no_display()}): the editor needs a display; {how}")
+
+
 def run_editor(args: argparse.Namespace) -> int:
     """Run the editor for the parsed flags of ``koolio-pm edit``
     (:mod:`~koolio_pymunk.apps.editor.command`); bad input raises :class:`KoolioError`."""
     try:
         size = window_size(args.size)
-        if args.screenshot:
+        if args.screenshot is not None:
             check_png(args.screenshot, "--screenshot")
+        check_display(args)
         model = make_model(args)
         config = load_config(args.config) if args.config else None
         app = EditorApp(model, size, config)
@@ -88,8 +106,25 @@ def run_editor(args: argparse.Namespace) -> int:
             run_script(app, args.script)
         if args.screenshot:
             app.screenshot(args.screenshot)
-        if (not args.script and not args.screenshot) or args.stay:
+            print(done_line(args, model))
+        elif args.script:
+            print(done_line(args, model))
+        if by_hand(args):
             app.run()
     finally:
-        pygame.quit()
+        # The window closes; the font module stays, as the viewer leaves it: the fonts
+        # cached by the drawing modules stay valid for a next window in this process.
+        pygame.display.quit()
     return 0
+
+
+def done_line(args: argparse.Namespace, model: EditorModel) -> str:
+    """What a scripted or screenshot run did: ``edit: script S run; arena 'office' (not saved
+    yet): valid; screenshot X``."""
+    problem = model.problem()
+    state = "valid" if problem is None else f"invalid ({problem.message})"
+    words = [f"script {args.script} run"] if args.script else []
+    words.append(f"{model.describe()}: {state}")
+    if args.screenshot:
+        words.append(f"screenshot {args.screenshot}")
+    return "edit: " + "; ".join(words)

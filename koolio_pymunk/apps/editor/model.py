@@ -238,6 +238,15 @@ class EditorModel:
         self._checked: tuple[Arena, Problem | None] | None = None
         self.last_label = ""
 
+    def describe(self) -> str:
+        """The document in a few words: its arena's name and its file.
+
+        >>> EditorModel.blank("office").describe()
+        "arena 'office' (not saved yet)"
+        """
+        where = "not saved yet" if self.path is None else str(self.path)
+        return f"arena {self._arena.name!r} ({where})"
+
     def set_path(self, path: str | FilePath) -> None:
         """Name the document's file (without saving): messages then name it too."""
         self.path, self.source = FilePath(path), str(path)

@@ -694,7 +694,7 @@ def draw_status(app: EditorApp) -> None:
     text(surface, app.ruler_text(), (x, y), STATUS_TEXT)
     problem = app.model.problem()
     if problem is None:
-        text(surface, f"valid arena ({app.model.source})", (x, y + LINE), OK)
+        text(surface, f"valid: {app.model.describe()}", (x, y + LINE), OK)
     else:
         for k, part in enumerate(_wrap(problem.message, rect.width - 20)[:2]):
             text(surface, part, (x, y + LINE * (1 + k)), ERROR)

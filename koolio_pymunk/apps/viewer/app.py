@@ -35,6 +35,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ...store.errors import KoolioError
+from ...task.display import headless, init_display, no_display
 from ..flags import check_png
 
 if TYPE_CHECKING:
@@ -119,7 +120,7 @@ def _speed(text: str) -> float:
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """The flags of ``train`` plus the window's own."""
     from ..cli import add_env_args, add_learning_files_args
-    from ..flags import MAX_EPISODES, int_type
+    from ..flags import MAX_EPISODES, file_name, int_type
 
     add_env_args(p)
     p.add_argument(
@@ -152,7 +153,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--steps", type=int_type(0, MAX_STEPS), default=None, help="run N steps, then Exit"
     )
     p.add_argument(
-        "--screenshot", default=None, metavar="FILE", help="PNG of the window at the end"
+        "--screenshot",
+        type=file_name,
+        default=None,
+        metavar="FILE",
+        help="PNG of the window at the end",
     )
     p.add_argument(
         "--screenshot-every",
@@ -238,9 +243,7 @@ def run(args: argparse.Namespace) -> int:
 
     if _headless():
         if args.steps is None and args.episodes is None:
-            raise KoolioError(
-                "view: headless (SDL_VIDEODRIVER=dummy) needs --steps N or --episodes N"
-            )
+            raise KoolioError(f"view: headless ({no_display()}) needs --steps N or --episodes N")
         if args.paused:
             raise KoolioError("--paused: a headless window cannot be resumed")
     env = KoolioEnv(arena=args.arena, config=args.config, goal=args.goal, world=args.world)
@@ -333,11 +336,10 @@ def closing_line(session: Any) -> str:
 
 
 def _headless() -> bool:
-    """True when SDL draws to no screen (``SDL_VIDEODRIVER=dummy`` or ``offscreen``)."""
-    import pygame
-
-    pygame.display.init()
-    return pygame.display.get_driver() in ("dummy", "offscreen")
+    """True when SDL draws to no screen (``SDL_VIDEODRIVER=dummy`` or ``offscreen``);
+    the display started without libwayland's ``XDG_RUNTIME_DIR`` line
+    (:mod:`koolio_pymunk.task.display`)."""
+    return headless()
 
 
 def _quit_pygame() -> None:
@@ -464,7 +466,7 @@ class ViewerApp:
         from . import hud
 
         self.pg, self.gui = pygame, pygame_gui
-        pygame.display.init()
+        init_display()
         pygame.font.init()
         self.screen = pygame.display.set_mode(size)
         pygame.display.set_caption(

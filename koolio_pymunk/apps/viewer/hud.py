@@ -448,13 +448,21 @@ def _num(v: float, fmt: str = "{:.1f}") -> str:
     return "-" if isinstance(v, float) and math.isnan(v) else fmt.format(v)
 
 
+def episode_number(session: Session) -> int:
+    """The number of the episode on the screen, counted from 1 as everywhere people read
+    episode numbers (``train``'s progress, the curve, the checks; the log's ``episode``
+    column is this number less one): the one running, or the one just finished while its
+    end is still shown. Learning, it is the table's count: a table of 163 episodes
+    resumed shows #164 first; watching, the episodes of this window."""
+    return session.episode + (0 if session.episode_over else 1)
+
+
 def stats_rows(session: Session, steps_per_s: float) -> list[tuple[str, str]]:
     """``(label, value)`` lines of the Stats panel; ``("", heading)`` starts a section."""
     env, st = session.env, session.stats
-    ep = session.episode + (0 if not session.episode_over else -1)
     trained = int(session.table.meta.get("episodes", 0))
     rows = [
-        ("", f"This episode (#{ep}, goal {env.goal_name})"),
+        ("", f"This episode (#{episode_number(session)}, goal {env.goal_name})"),
         ("reward", f"{env.episode_reward:g}"),
         ("steps", f"{env.steps}"),
         ("bumps", f"{env.bumps}"),
@@ -499,19 +507,25 @@ def draw_stats(
 
 
 # -- the live learning curve -------------------------------------------------------------------
-def nice_ticks(lo: float, hi: float, most: int = 6) -> list[float]:
+def nice_ticks(lo: float, hi: float, most: int = 6, whole: bool = False) -> list[float]:
     """Round tick values (1, 2, 2.5 or 5 x 10^k apart) inside ``[lo, hi]``: the closest
-    spacing that gives at most ``most`` of them.
+    spacing that gives at most ``most`` of them; ``whole``: whole numbers only (episodes:
+    no 1.5, which a label rounds to a second "2").
 
     >>> nice_ticks(-2282, 182)
     [-2000.0, -1500.0, -1000.0, -500.0, 0.0]
     >>> nice_ticks(1, 1501, 6)
     [250.0, 500.0, 750.0, 1000.0, 1250.0, 1500.0]
+    >>> nice_ticks(1, 3, 6), nice_ticks(1, 3, 6, whole=True)
+    ([1.0, 1.5, 2.0, 2.5, 3.0], [1.0, 2.0, 3.0])
+    >>> nice_ticks(1, 12, 6, whole=True)
+    [2.0, 4.0, 6.0, 8.0, 10.0, 12.0]
     """
     if not (math.isfinite(lo) and math.isfinite(hi)) or hi <= lo:
         return [lo] if math.isfinite(lo) else []
     mag = 10.0 ** math.floor(math.log10((hi - lo) / max(1, most)))
-    for step in (m * mag for m in (1.0, 2.0, 2.5, 5.0, 10.0, 20.0, 25.0, 50.0)):
+    steps = (m * mag for m in (1.0, 2.0, 2.5, 5.0, 10.0, 20.0, 25.0, 50.0))
+    for step in steps if not whole else (s for s in steps if s >= 1 and s == int(s)):
         first, last = math.ceil(lo / step - 1e-9), math.floor(hi / step + 1e-9)
         if last - first + 1 <= most:
             return [float(k * step) for k in range(first, last + 1)]
@@ -646,7 +660,8 @@ def _axis_labels(surface: pygame.Surface, ax: _Axes, st: Style, n: int, goal: bo
     """Episode ticks under the plot, goal-rate ticks (0, 50, 100 %) on the right; returns
     the episode ticks."""
     plot = ax.plot
-    ticks = nice_ticks(1, max(1, n), max(2, ax.plot.w // st.px(56))) if n > 1 else []
+    most = max(2, ax.plot.w // st.px(56))
+    ticks = nice_ticks(1, max(1, n), most, whole=True) if n > 1 else []
     for e in ticks:
         xx = ax.x(e - 1)
         pygame.draw.line(surface, CURVE_AXES, (xx, plot.bottom), (xx, plot.bottom + st.px(3)))
