@@ -214,6 +214,15 @@ def build_parser() -> argparse.ArgumentParser:
         "SIGTERM",
     )
     p.add_argument(
+        "--tensorboard",
+        type=file_name,
+        default=None,
+        metavar="DIR",
+        help="also write the run's scalars (every episode's return, steps, bumps, goal, "
+        "epsilon; the training goal rate; the checks of --eval-every) as TensorBoard event "
+        "files in DIR, at the environment step each episode ended on",
+    )
+    p.add_argument(
         "--fsync",
         choices=("second", "episode"),
         default="second",
@@ -416,6 +425,9 @@ def cmd_train(args: argparse.Namespace) -> int:
     if not 1 <= args.robots <= MAX_ROBOTS:
         raise KoolioError(f"--robots: must be in 1..{MAX_ROBOTS}, got {args.robots}")
     checks = _eval_every_args(args)
+    board = Path(args.tensorboard) if args.tensorboard is not None else None
+    if board is not None and board.exists() and not board.is_dir():
+        raise KoolioError(located(args.tensorboard, "--tensorboard", "is a file, not a folder"))
     env = _make_env(args)
     say = (lambda s: None) if args.quiet else print
     fallbacks: list[str] = []  # the table's file damaged or missing: its backup is used
@@ -456,6 +468,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         save_seconds=args.save_seconds,
         robots=args.robots,
         fsync=args.fsync,
+        tensorboard=args.tensorboard,
     )
     if args.verbose and result.python_reason is not None:
         say(f"stepped in the Python loop: {result.python_reason}")

@@ -426,6 +426,7 @@ def train(
     compiled: bool = True,
     robots: int = 1,
     fsync: str = "second",
+    tensorboard: str | Path | None = None,
 ) -> TrainResult:
     """Train ``robots`` robots for ``episodes`` more episodes into one table (``koolio-pm
     train --episodes N`` is the total the table reaches: it passes N minus the episodes
@@ -466,6 +467,9 @@ def train(
     the end, on Ctrl-C and SIGTERM) and each episode's changes in between to its journal;
     ``episode``, the paper's rule, writes and fsyncs it whole at every save.
 
+    ``tensorboard``: a folder for TensorBoard's event files of the run's scalars
+    (:mod:`koolio_pymunk.learning.scalars`).
+
     ``eval_every`` N > 0: a greedy check of ``eval_episodes`` episodes each time the
     table's episode count reaches a multiple of N, and the best table kept
     (:mod:`koolio_pymunk.learning.evaluation`); the training itself is the same. With
@@ -505,6 +509,11 @@ def train(
     loop = make_robots(env, agents, seed, TRAIN_STREAM, compiled=compiled, journal=journal)
     files.before_save = loop.sync_table
     files.changed_rows = loop.changed_rows
+    scalars = None
+    if tensorboard is not None:
+        from .scalars import RunScalars, logged_steps
+
+        scalars = RunScalars(tensorboard, logged_steps(log_path))
     progress = Progress()
     results: list[EpisodeResult] = []
     checks: list[Check] = []
@@ -547,6 +556,8 @@ def train(
                     files.finished(res)
                     results.append(res)
                     progress.add(res)
+                    if scalars is not None:
+                        scalars.episode(res)
                     now = time.perf_counter()
                     if report and (now - last_report >= report_every or finished == episodes):
                         eps = loop.agents[r].epsilon
@@ -558,6 +569,9 @@ def train(
                         interrupted = _check(
                             checker, env, loop, first + finished, guard, checks, report
                         )
+                        done = checks and checks[-1].episode == first + finished
+                        if scalars is not None and done:
+                            scalars.check(checks[-1])
                     start(r)
                 files.checkpoint()  # the end (or a stop between episodes): always durable
             except KeyboardInterrupt:
@@ -566,6 +580,8 @@ def train(
     finally:
         try:
             loop.sync()  # the envs and learners as the Python steps would leave them
+            if scalars is not None:
+                scalars.close()
         finally:
             try:
                 files.close()
