@@ -1408,10 +1408,15 @@ class RobotLearner:
     def moved(self, codes: Sequence[int]) -> None:
         """The robot was moved by hand (a rescue, after :meth:`step`): the episode goes
         on from the state of ``codes``, with no update (a person's move is no action of
-        the policy), and is logged as rescued."""
+        the policy), Q(lambda)'s traces cleared when it is not the state the last step
+        led to (as ``QLambda`` clears them when a step does not start where the last one
+        ended), and is logged as rescued."""
         if self.state is None:
             raise PolicyError("moved: call begin() first")
-        self.state = self.policy.state_key(codes)
+        moved_to = self.policy.state_key(codes)
+        if self.traces is not None and moved_to != self.state:
+            self.traces.clear()  # the next step does not start where the last one ended
+        self.state = moved_to
         self.last = -1  # the next action undoes nothing
         self.rescued = True
 

@@ -45,11 +45,15 @@ def make_learner(
 
 
 def algorithm_record(cfg: LearnerConfig) -> dict[str, Any] | None:
-    """What a Q-table header records of ``cfg``'s algorithm: None for one-step Q.
+    """What a Q-table header records of ``cfg``'s algorithm: None for one-step Q without
+    the no-undo rule (the paper's learner: its tables' bytes are those of tables made
+    before these records existed).
 
-    >>> algorithm_record(LearnerConfig(algorithm="dyna", planning_steps=5))
+    >>> algorithm_record(LearnerConfig())  # the default learner
+    {'name': 'qlambda', 'trace_decay': 0.7, 'trace_cutoff': 0.01, 'no_undo': True}
+    >>> algorithm_record(LearnerConfig(algorithm="dyna", planning_steps=5, no_undo=False))
     {'name': 'dyna', 'planning_steps': 5}
-    >>> algorithm_record(LearnerConfig()) is None
+    >>> algorithm_record(LearnerConfig(algorithm="q", no_undo=False)) is None
     True
     """
     rule = {"no_undo": True} if cfg.no_undo else {}  # absent when off: tables as before
@@ -76,7 +80,7 @@ def check_rule(table: QTable, cfg: LearnerConfig, source: str, remedy: str) -> N
     >>> rec = {"name": "q", "no_undo": True}
     >>> t = QTable(KeywordLayout((("A", 3),)), {"algorithm": rec, "episodes": 2})
     >>> check_rule(t, LearnerConfig(no_undo=True), "t.qtable", "")
-    >>> check_rule(t, LearnerConfig(), "t.qtable", "give its --config")
+    >>> check_rule(t, LearnerConfig(no_undo=False), "t.qtable", "give its --config")
     Traceback (most recent call last):
     koolio_pymunk.store.errors.QTableError: t.qtable: learner.no_undo: table learned with the ...
     """
@@ -122,7 +126,7 @@ def check_algorithm(table: QTable, cfg: LearnerConfig, source: str, remedy: str)
 
     >>> from koolio_pymunk.store.keyword import KeywordLayout
     >>> t = QTable(KeywordLayout((("A", 3),)), {"algorithm": {"name": "dyna"}, "episodes": 2})
-    >>> check_algorithm(t, LearnerConfig(algorithm="dyna"), "t.qtable", "")
+    >>> check_algorithm(t, LearnerConfig(algorithm="dyna", no_undo=False), "t.qtable", "")
     >>> check_algorithm(t, LearnerConfig(), "t.qtable", "give its --config")
     Traceback (most recent call last):
     koolio_pymunk.store.errors.QTableError: t.qtable: algorithm: table learned with dyna, this ...

@@ -56,7 +56,7 @@ def test_runtime_greedy_matches_simulator_for_every_state(trained, tmp_path):
         for a in range(5):
             assert policy.layout.keyword(codes, a) == env.layout.keyword(codes, a)
         assert policy.layout.decode((state << 3) | 4) == (codes, 4)
-    assert unique > 20
+    assert unique > 8  # the premise: many states with one greedy action
     doc = json.loads(out.read_text())
     greedy = {g["state"]: g["action"] for g in doc["greedy"]}
     assert all(
@@ -194,16 +194,19 @@ def test_init_qtable_refuses_other_sensor_layout(trained, tmp_path, capsys):
         (lambda d: d.pop("sensors"), "sensors: missing"),
         (lambda d: d["greedy"][0].update(action=9), "greedy[0].action: action 9 is not an action"),
         (lambda d: d["greedy"][1].update(action=True), "greedy[1]: needs an integer state and"),
-        (lambda d: d["greedy"].pop(), "greedy: 163 items, expected 164 (one per state of"),
+        (lambda d: d["greedy"].pop(), "greedy: {n-1} items, expected {n} (one per state of"),
         (lambda d: d["greedy"].reverse(), "greedy[0].state: "),
         (lambda d: d["layout"].update(total_bits=99), "layout.total_bits: 99, expected 27"),
         (lambda d: d["layout"].update(total_bits="27"), "layout.total_bits: '27', expected 27"),
-        (lambda d: d.update(n_states=d["n_states"] + 1), "n_states: 165, expected 164 (the states"),
-        (lambda d: d.update(n_states=None), "n_states: None, expected 164"),
+        (lambda d: d.update(n_states=d["n_states"] + 1), "n_states: {n+1}, expected {n} (the st"),
+        (lambda d: d.update(n_states=None), "n_states: None, expected {n}"),
     ],
 )
 def test_bad_policy_files_are_refused_in_one_line(trained, tmp_path, edit, message):
     _, table, _ = trained
+    n = len(table)
+    message = message.replace("{n-1}", str(n - 1)).replace("{n+1}", str(n + 1))
+    message = message.replace("{n}", str(n))
     doc = policy_document(table)
     edit(doc)
     bad = tmp_path / "bad.json"
@@ -357,7 +360,7 @@ def test_export_checks_the_table_against_the_configuration(tmp_path, capsys):
     )
     line = expect_error(capsys, tmp_path, ["export", "--qtable", str(dyna), "--out", out])
     assert line == (
-        f"koolio-pm: error: {dyna}: algorithm: table learned with dyna, this run uses q "
+        f"koolio-pm: error: {dyna}: algorithm: table learned with dyna, this run uses qlambda "
         "(give export the --config it was learned with)"
     )
     argv = ["export", "--qtable", str(mem), "--config", "paper-memory-qlambda", "--out", out]

@@ -285,7 +285,7 @@ def test_transfer_dumps_its_settings_only_with_verbose(here, capsys) -> None:
     dump = [ln for ln in out.splitlines() if ln.startswith("  ")][:14]
     assert dump[0] == f"  arena: room ({REPO / 'arenas' / 'room.yaml'})"
     assert "  config: file tiny.yaml" in dump
-    assert "  robot alpha: 0.2 (config's)" in dump
+    assert "  robot alpha: 0.1 (config's)" in dump
     assert not [ln for ln in dump if "None" in ln or "(default)" in ln]
     code, out, _ = run(capsys, *TRANSFER, "--out", "c", "--quiet", "--verbose")
     assert code == 0 and not out.startswith("transfer:")  # --quiet: the results only
@@ -344,7 +344,8 @@ def test_a_table_whose_dyna_model_is_bad_is_handled_like_a_torn_one(here, capsys
         "learner: {algorithm: dyna, planning_steps: 3}\nepisode: {max_steps: 30}\n"
     )
     dyna = ["--arena", "room", "--config", "dyna.yaml"]
-    assert run(capsys, "train", *dyna, "--qtable", "d.qtable", "--episodes", "2")[0] == 0
+    train = ["train", *dyna, "--qtable", "d.qtable", "--episodes", "2", "--fsync", "episode"]
+    assert run(capsys, *train)[0] == 0  # the backup: the table of episode 1
     table = load_qtable(here / "d.qtable")
     assert "dyna_model" in table.sections
     table.sections["dyna_model"] = b"not a model"

@@ -117,7 +117,7 @@ def test_transfer_command_end_to_end_and_reproducible(tmp_path, capsys) -> None:
         assert [c["episode"] for c in robot["checks"]] == [0, 2, 3]
         assert robot["recovered_at"] == 0  # target 0: recovered before learning
         assert robot["learning"]["episodes"] == 3 and robot["learning"]["judge_mismatches"] == 0
-        assert robot["alpha"] == 0.2 and robot["epsilon"] == pytest.approx(0.15 - 0.14 * 3 / 600)
+        assert robot["alpha"] == 0.1 and robot["epsilon"] == pytest.approx(0.15 - 0.14 * 3 / 150)
         assert r["table_episodes"] == 3 and set(r["greedy"]) == {"ideal", "real"}
         log = (tmp_path / "a" / robot["log"]).read_text().splitlines()
         assert [row.split(",")[0] for row in log[1:]] == ["3", "4", "5"]  # after training

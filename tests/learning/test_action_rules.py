@@ -174,9 +174,9 @@ def test_a_table_is_read_only_under_the_rule_it_was_learned_with(tmp_path, capsy
     from koolio_pymunk.learning.qtable import load_qtable
 
     cfg = tmp_path / "n.yaml"
-    cfg.write_text("episode: {max_steps: 60}\nlearner: {no_undo: true}\n")
+    cfg.write_text("episode: {max_steps: 60}\nlearner: {algorithm: q, no_undo: true}\n")
     plain = tmp_path / "p.yaml"
-    plain.write_text("episode: {max_steps: 60}\n")
+    plain.write_text("episode: {max_steps: 60}\nlearner: {algorithm: q, no_undo: false}\n")
     t, u = tmp_path / "t.qtable", tmp_path / "u.qtable"
     room = ["--arena", "room", "--episodes", "3"]
     assert main(["train", *room, "--config", str(cfg), "--qtable", str(t), "--quiet"]) == 0
@@ -203,8 +203,8 @@ def test_a_table_is_read_only_under_the_rule_it_was_learned_with(tmp_path, capsy
 def test_transfer_refuses_a_table_of_the_other_rule(tmp_path, capsys) -> None:
     from koolio_pymunk.apps.cli import main
 
-    cfg = tmp_path / "n.yaml"
-    cfg.write_text("episode: {max_steps: 40}\nlearner: {no_undo: true}\n")
+    cfg = tmp_path / "n.yaml"  # the default learner without the rule (the default has it)
+    cfg.write_text("episode: {max_steps: 40}\nlearner: {no_undo: false}\n")
     t = tmp_path / "t.qtable"
     argv = ["train", "--episodes", "2", "--config", str(cfg), "--qtable", str(t), "--quiet"]
     assert main(argv) == 0
@@ -213,5 +213,5 @@ def test_transfer_refuses_a_table_of_the_other_rule(tmp_path, capsys) -> None:
     argv = ["transfer", "--qtable", str(t), "--dr-qtable", str(t), "--out", str(out)]
     assert main(argv) == 2
     err = capsys.readouterr().err
-    assert f"{t}: learner.no_undo: table learned with the no-undo rule" in err
+    assert f"{t}: learner.no_undo: table learned choosing among all actions" in err
     assert err.count("\n") == 1 and not out.exists()

@@ -136,8 +136,9 @@ def _train(tmp_path, name: str, episodes: int, config: Config, seed: int = 0):
 
 
 def small(**learner_cfg) -> Config:
-    cfg = load_config(overrides={"learner": learner_cfg, "episode": {"max_steps": 60}})
-    return cfg
+    """One-step Q's settings (the ``one-step-q`` profile) with ``learner_cfg`` over them."""
+    over = {"learner": learner_cfg, "episode": {"max_steps": 60}}
+    return load_config("one-step-q", overrides=over)
 
 
 def test_lambda_zero_is_one_step_q_bit_for_bit(tmp_path) -> None:
@@ -235,7 +236,7 @@ def test_algorithm_mismatch_on_resume_is_refused_and_init_qtable_converts(tmp_pa
     assert main([*base, "--config", str(plain), "--qtable", str(q)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [
-        f"koolio-pm: error: {q}: algorithm: table learned with dyna, this run uses q "
+        f"koolio-pm: error: {q}: algorithm: table learned with dyna, this run uses qlambda "
         f"(start a new table from its Q values: --init-qtable {q} --qtable NEW)"
     ]
     assert q.read_bytes() == before
@@ -243,8 +244,8 @@ def test_algorithm_mismatch_on_resume_is_refused_and_init_qtable_converts(tmp_pa
     argv = [*base, "--config", str(plain), "--qtable", str(new), "--init-qtable", str(q)]
     argv[argv.index("--episodes") + 1] = "4"  # a total: the 2 of t.qtable, then 2 more
     assert main(argv) == 0
-    table = load_qtable(new)
-    assert "algorithm" not in table.meta and table.sections == {}
+    table = load_qtable(new)  # the default learner's record, the Dyna model dropped
+    assert table.meta["algorithm"]["name"] == "qlambda" and table.sections == {}
     assert table.meta["episodes"] == 4
 
 
@@ -308,8 +309,9 @@ def _policy_pair(algorithm: str, **learner_cfg):
     [("q", {}), ("qlambda", {"trace_decay": 0.8}), ("dyna", {"planning_steps": 3})],
 )
 def test_robot_runtime_learns_bit_for_bit_like_the_simulator(tmp_path, algorithm, params):
-    """Same transitions and the same random draws: the same actions, Q values, traces and
-    model, and a save/load of the policy file in the middle changes nothing."""
+    """Same transitions, rescues (the robot moved between two steps) and random draws:
+    the same actions, Q values, traces and model, and a save/load of the policy file in
+    the middle changes nothing."""
     import random
 
     from koolio_pymunk import robot_runtime as rt
@@ -340,6 +342,10 @@ def test_robot_runtime_learns_bit_for_bit_like_the_simulator(tmp_path, algorithm
             s, steps = s2, steps + 1
             if end:
                 break
+            if world.random() < 0.1:  # a rescue: the robot moved (sometimes where it was)
+                s = world.choice([s, *states])
+                ref.relocated(s)
+                rob.moved(codes(s))
         rob.end("goal")
         if episode == 40:  # the robot's file round trip keeps everything it learns from
             path = tmp_path / "p.json"

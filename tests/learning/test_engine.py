@@ -211,7 +211,7 @@ def test_what_the_engine_does_not_run_steps_in_python_and_says_why(overrides, re
 def test_qlearner_and_qlambda_run_on_the_engine_and_learn_apart():
     """The premise of the Q(lambda) cases: its steps take the traced update."""
     tables = {}
-    for overrides in ({}, QLAMBDA):
+    for overrides in ({"learner": {"algorithm": "q"}}, QLAMBDA):
         env = KoolioEnv("hallway", config=load_config(overrides=overrides), max_steps=200)
         table = QTable(env.layout, {}, env.config.learner.q_init)
         loop = robots(env, [make_learner(table, env.config.learner, None)], seed=1)
@@ -283,7 +283,8 @@ def test_trace_capacity_bounds_the_traces():
     decay, cutoff = 0.98 * 0.9, 0.01
     cap = trace_capacity(decay, cutoff)
     assert decay ** (cap - 2) < cutoff <= decay ** (cap - 3)
-    env = KoolioEnv("hallway", config=load_config(overrides=QLAMBDA), max_steps=300)
+    lam = {"learner": {"algorithm": "qlambda", "trace_decay": 0.9}}
+    env = KoolioEnv("hallway", config=load_config(overrides=lam), max_steps=300)
     table = QTable(env.layout, {}, env.config.learner.q_init)
     agent = make_learner(table, env.config.learner, None)
     loop = Robots([env], [agent], seed=0)
@@ -321,10 +322,10 @@ def test_seeded_run_with_robots_is_reproducible_and_seed_matters(tmp_path) -> No
 def test_a_resumed_run_with_robots_is_seeded_but_not_the_straight_run(tmp_path) -> None:
     """Resuming is reproducible (the same two commands, the same bytes); it is not the
     uninterrupted run, whose robots were mid-episode at the save (docs/robustness.md)."""
-    for name in ("a", "b"):
-        run(tmp_path, name, episodes=6, robots_=3)
-        run(tmp_path, name, episodes=6, robots_=3)
-    straight, _, _ = run(tmp_path, "c", episodes=12, robots_=3)
+    for name in ("a", "b"):  # 5 of 3 robots: the third robot is idle at the save
+        run(tmp_path, name, episodes=5, robots_=3)
+        run(tmp_path, name, episodes=5, robots_=3)
+    straight, _, _ = run(tmp_path, "c", episodes=10, robots_=3)
     a, b = (tmp_path / "a.qtable").read_bytes(), (tmp_path / "b.qtable").read_bytes()
     assert a == b
     assert (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()

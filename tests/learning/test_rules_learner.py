@@ -40,10 +40,10 @@ def test_reward_priority(action, goal_close, eow, bump, event, reward, done) -> 
 
 
 def agent(alpha=0.5, gamma=0.9, seed=0) -> tuple[QLearner, QTable]:
+    """The paper's learner: one-step Q choosing among all five actions."""
     table = QTable(KeywordLayout((("A", 3), ("B", 4))))
-    return QLearner(
-        table, LearnerConfig(alpha=alpha, gamma=gamma), np.random.default_rng(seed)
-    ), table
+    cfg = LearnerConfig(algorithm="q", alpha=alpha, gamma=gamma, no_undo=False)
+    return QLearner(table, cfg, np.random.default_rng(seed)), table
 
 
 def test_table11_update() -> None:

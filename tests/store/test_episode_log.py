@@ -200,7 +200,7 @@ def test_the_log_of_another_table_ahead_of_it_is_refused(work, capsys):
     capsys.readouterr()
     line = expect_error(capsys, work, [*mine, "--log", "q.csv", "--episodes", "3"])
     assert line == (
-        "koolio-pm: error: q.csv: line 3: episode 1 has epsilon 0.149767, which this run's "
+        "koolio-pm: error: q.csv: line 3: episode 1 has epsilon 0.149067, which this run's "
         "learner.epsilon never gives: a row of another run, ahead of the Q-table m.qtable "
         "(1 episode); give another --log, or resume with the configuration that wrote it"
     )

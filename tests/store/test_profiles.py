@@ -56,18 +56,23 @@ def test_paper_memory_qlambda_profile_is_paper_memory_with_its_memory_and_learne
     )
     lam.sensors.memory = mem.sensors.memory
     lam.learner.algorithm, lam.learner.alpha = mem.learner.algorithm, mem.learner.alpha
+    lam.learner.trace_decay = mem.learner.trace_decay  # one-step Q: no trace
     assert lam == mem
 
 
-def test_qlambda_no_undo_profile_is_the_default_with_its_learner_only() -> None:
-    """``qlambda-no-undo`` is the default robot (sensors, rewards, everything) with
-    Q(lambda) (lambda 0.7, alpha 0.1, epsilon over 150 episodes) and the no-undo rule."""
-    fast, default = load_config("qlambda-no-undo"), load_config()
+def test_qlambda_no_undo_profile_is_the_default_named() -> None:
+    """``qlambda-no-undo`` is the default (Q(lambda) with lambda 0.7, alpha 0.1, epsilon
+    over 150 episodes, and the no-undo rule), named; ``one-step-q`` is the default robot
+    with the learner the default had before: the paper's one-step Q with this project's
+    settings for it."""
+    fast, default, before = load_config("qlambda-no-undo"), load_config(), load_config("one-step-q")
     le = fast.learner
     assert (le.algorithm, le.trace_decay, le.alpha, le.no_undo) == ("qlambda", 0.7, 0.1, True)
-    assert le.epsilon.decay_episodes == 150 and not default.learner.no_undo
-    fast.learner = default.learner
-    assert fast == default
+    assert le.epsilon.decay_episodes == 150 and fast == default
+    lo = before.learner
+    assert (lo.algorithm, lo.alpha, lo.no_undo, lo.epsilon.decay_episodes) == ("q", 0.2, False, 600)
+    before.learner = default.learner
+    assert before == default
 
 
 def test_unknown_profile_is_one_line_error() -> None:
