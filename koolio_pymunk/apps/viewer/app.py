@@ -341,8 +341,21 @@ def _headless() -> bool:
 
 
 def _quit_pygame() -> None:
-    import pygame
+    """Close the display and let the window go.
 
+    pygame_gui keeps the first ``UIManager`` made in a module global (its default
+    manager), and the window's manager holds the window (its panel follows the app's
+    pointer), so the window, its env, the world and the world's pymunk spaces would
+    otherwise stay alive until the interpreter's very last garbage collection. That one
+    runs after cffi has stopped calling back into Python: pymunk's finalizer of a space
+    then cannot list the space's bodies, frees the space, and a body's finalizer removes
+    the body from the freed space: a segfault at exit (``view --episodes 0``, which draws
+    nothing, made the collection order that crashes). Without the global the window is
+    collected with everything else while the interpreter still runs."""
+    import pygame
+    from pygame_gui.core.utility import set_default_manager
+
+    set_default_manager(None)
     pygame.display.quit()
 
 
