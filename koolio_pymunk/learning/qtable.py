@@ -150,7 +150,7 @@ class QTable:
     def to_bytes(self) -> bytes:
         """The ``.qtable`` file's bytes (:meth:`from_bytes` reads them back exactly)."""
         header = dict(self.meta)
-        header.update(format=FORMAT_VERSION, layout=self.layout.to_json(), q_init=self.q_init)
+        header.update(format=FORMAT_VERSION, layout=self.layout.header_json(), q_init=self.q_init)
         blobs = [(name, bytes(self.sections[name])) for name in sorted(self.sections)]
         if blobs:
             header["sections"] = [[name, len(blob)] for name, blob in blobs]

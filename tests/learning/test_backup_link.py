@@ -174,7 +174,7 @@ def _reference_bytes(table: QTable) -> bytes:
     import json
 
     header = dict(table.meta)
-    header.update(format=1, layout=table.layout.to_json(), q_init=table.q_init)
+    header.update(format=1, layout=table.layout.header_json(), q_init=table.q_init)
     hjson = json.dumps(header, sort_keys=True, separators=(",", ":")).encode()
     keys = sorted(table.rows)
     body = b"".join(
