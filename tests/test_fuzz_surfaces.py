@@ -42,7 +42,7 @@ from koolio_pymunk import robot_runtime as rt
 from koolio_pymunk.apps import cli
 from koolio_pymunk.apps.export import policy_document
 from koolio_pymunk.learning.dyna import DynaQ
-from koolio_pymunk.learning.dyna_model import SECTION, Model, robot_layout
+from koolio_pymunk.learning.dyna_model import SECTION, Model
 from koolio_pymunk.learning.qtable import QTable, load_qtable
 from koolio_pymunk.store.config import Config, LearnerConfig, apply_world
 from koolio_pymunk.store.episode_log import log_rows
@@ -254,7 +254,7 @@ def _learn_and_reload(table: QTable, rng: random.Random, label: str) -> None:
 def test_fuzz_dyna_model_sections():
     """Both readers agree on every mutated model, and what they accept learns safely."""
     rng = rng_for("dyna")
-    lay = robot_layout(LAYOUT)
+    lay = LAYOUT
     accepted = 0
     for case in range(CASES):
         label = f"dyna case {case}"
