@@ -391,18 +391,10 @@ def warn_endless(cfg) -> None:
         )
 
 
-def _positive(value: int, flag: str) -> None:
-    if value < 0:
-        raise KoolioError(f"{flag}: must be >= 0, got {value}")
-
-
 def cmd_train(args: argparse.Namespace) -> int:
     from ..learning.qtable import QTableStore
     from ..learning.training import RunFiles, train
 
-    _positive(args.episodes, "--episodes")
-    if not 1 <= args.robots <= MAX_ROBOTS:
-        raise KoolioError(f"--robots: must be in 1..{MAX_ROBOTS}, got {args.robots}")
     checks = _eval_every_args(args)
     env = _make_env(args)
     say = (lambda s: None) if args.quiet else print
@@ -639,7 +631,6 @@ def cmd_eval(args: argparse.Namespace) -> int:
     from ..learning.training import evaluate
     from ..world.arena import arena_record
 
-    _positive(args.episodes, "--episodes")
     eps = args.epsilon
     goal_all = args.goal == "all"
     if goal_all:

@@ -507,8 +507,6 @@ def run(args: argparse.Namespace) -> int:
     from .cli import DEFAULT_LOG
     from .flags import check_png
 
-    if args.window < 1:
-        raise KoolioError(f"--window: must be >= 1, got {args.window}")
     check_png(args.out, "--out")
     paths = [*args.logs, *(args.log or [])] or [DEFAULT_LOG]
     logs = [read_log(p) for p in paths]

@@ -211,8 +211,6 @@ def run(args: argparse.Namespace) -> int:
         apply_world(load_config(), args.world)  # a bad name or file: one line naming --world
         spec.world = args.world
     out = Path(args.out) if args.out else Path("sweeps") / spec.name
-    if args.workers is not None and args.workers < 1:
-        raise KoolioError(f"--workers: must be >= 1, got {args.workers}")
     tasks = plan(spec)
     if args.dry_run:
         configs = {t["config_id"]: t["label"] for t in tasks}

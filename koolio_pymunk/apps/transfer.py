@@ -129,24 +129,13 @@ class TransferConfig:
     schedule's value at the table's episode count)."""
 
     def validate(self) -> None:
-        """Check the numbers; :class:`KoolioError` (one line) naming the flag."""
-        checks = (
-            (self.episodes >= 0, "--episodes", "must be >= 0"),
-            (self.robot_episodes >= 0, "--robot-episodes", "must be >= 0"),
-            (self.eval_episodes >= 1, "--eval-episodes", "must be >= 1"),
-            (self.eval_every >= 1, "--eval-every", "must be >= 1"),
-            (0.0 <= self.target <= 1.0, "--target", "must be in [0, 1]"),
-            (bool(self.seeds), "--seed", "needs at least one seed"),
-            (len(set(self.seeds)) == len(self.seeds), "--seed", "repeated seed"),
-        )
-        for ok, flag, problem in checks:
-            if not ok:
-                raise KoolioError(f"{flag}: {problem}")
-        alpha, epsilon = self.robot_alpha, self.robot_epsilon
-        if alpha is not None and not 0.0 < alpha <= 1.0:  # learner.alpha's range
-            raise KoolioError(f"--robot-alpha: must be in (0, 1], got {alpha:g}")
-        if epsilon is not None and not 0.0 <= epsilon <= 1.0:
-            raise KoolioError(f"--robot-epsilon: must be in [0, 1], got {epsilon:g}")
+        """Check what the flags' types cannot (each number's range is checked once, where
+        argparse reads the flag: :mod:`koolio_pymunk.apps.flags`); :class:`KoolioError`
+        (one line) naming the flag."""
+        if not self.seeds:
+            raise KoolioError("--seed: needs at least one seed")
+        if len(set(self.seeds)) != len(self.seeds):
+            raise KoolioError("--seed: repeated seed")
         if self.goal == "random":
             raise KoolioError("--goal: random: the experiment delivers to one door (name it)")
 

@@ -188,10 +188,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def _check_args(args: argparse.Namespace) -> tuple[int, Path] | None:
     if args.greedy and args.learn:
         raise KoolioError("--greedy, --learn: choose one (watch the table, or learn into it)")
-    if args.episodes is not None and args.episodes < 0:
-        raise KoolioError(f"--episodes: must be >= 0, got {args.episodes}")
-    if args.steps is not None and args.steps < 0:
-        raise KoolioError(f"--steps: must be >= 0, got {args.steps}")
     if args.screenshot is not None:
         check_png(args.screenshot, "--screenshot")
     if args.screenshot_every is None:
