@@ -14,9 +14,9 @@ import pytest
 
 from koolio_pymunk import robot_runtime as rt
 from koolio_pymunk.apps.export import policy_document, write_policy
+from koolio_pymunk.learning.episodes import EpisodeResult
 from koolio_pymunk.learning.qlearning import QLearner
 from koolio_pymunk.learning.qtable import QTable, sensor_signature
-from koolio_pymunk.learning.training import LOG_FIELDS, EpisodeResult, LogWriter
 from koolio_pymunk.store.config import (
     Config,
     LearnerConfig,
@@ -24,6 +24,7 @@ from koolio_pymunk.store.config import (
     SensorConfig,
     state_fields,
 )
+from koolio_pymunk.store.episode_log import LOG_FIELDS, LogWriter
 from koolio_pymunk.store.keyword import KeywordLayout
 from koolio_pymunk.task.rules import judge
 

@@ -22,7 +22,8 @@ Sections (each printed as a table row, all written to ``--out`` as JSON):
 * **IR-SIM, same run**: IR-SIM (``ir-sim``, the ``compare`` extra) stepping the same
   hallway with an 88-beam lidar (``tools/irsim_compare.py``, collision mode ``stop``), and
   the end-to-end row's ratio to it; skipped with a note when ir-sim is not installed;
-* **N robots**: :func:`multi.train_many` with ``--robots`` robots, robot-steps per second;
+* **N robots**: ``learning.fleet.train_many`` with ``--robots`` robots, robot-steps per
+  second;
 * **motion**: the cost of one 12-inch move from the same seeded random free poses of the
   hallway (near a wall: within 12 in of one): the pymunk world's (``World.move``), the
   compiled move (``swept_move.move``) called from Python, and per move inside one
@@ -429,8 +430,9 @@ def competence(
     seed: int, check_every: int, max_episodes: int, eval_episodes: int, folder: Path
 ) -> dict:
     """Default training until 90 % of greedy evaluation episodes reach the goal."""
+    from koolio_pymunk.learning.evaluation import evaluate
     from koolio_pymunk.learning.qtable import QTableStore, human_bytes
-    from koolio_pymunk.learning.training import evaluate, train
+    from koolio_pymunk.learning.training import train
     from koolio_pymunk.task.env import KoolioEnv
 
     env = KoolioEnv("hallway")

@@ -627,8 +627,8 @@ def _seed_table(init_path: str, store, log: str, env) -> None:
 
 def cmd_eval(args: argparse.Namespace) -> int:
     from ..learning.algorithms import check_rule
+    from ..learning.evaluation import evaluate
     from ..learning.qtable import check_compatible, sensor_signature
-    from ..learning.training import evaluate
     from ..world.arena import arena_record
 
     eps = args.epsilon
@@ -751,7 +751,7 @@ def warn_table(table, source: str, env, policy: bool = False, verb: str = "score
     it was trained in another world than the one it is scored in (a transfer: its figure
     is not its training's; unknown for a ``policy`` file)."""
     from ..learning.qtable import describe_world
-    from ..learning.training import world_label
+    from ..store.worlds import world_label
 
     if int(table.meta.get("episodes", 0)) == 0:
         print(

@@ -8,7 +8,7 @@ real robot. For every seed, and for two tables (``ideal``: trained in the ideal 
 1. **train** the table in simulation (``--episodes``), or load it (``--qtable``,
    ``--dr-qtable``);
 2. **evaluate** its greedy policy in the ideal world and in the realistic world
-   (:func:`~koolio_pymunk.learning.training.evaluate`, the figures of ``koolio-pm eval``);
+   (:func:`~koolio_pymunk.learning.evaluation.evaluate`, the figures of ``koolio-pm eval``);
 3. **hand it to the robot and keep learning there**: the table is exported
    (:func:`~koolio_pymunk.apps.export.policy_document`), loaded with ``robot_runtime.Policy``
    and driven by ``robot_runtime.RobotLearner`` from raw readings, exactly as on the
@@ -68,8 +68,9 @@ import numpy as np
 from .. import robot_runtime as rt
 from ..learning.algorithms import check_rule
 from ..learning.episodes import EVAL_STREAM, ROBOT_STREAM, Episodes
+from ..learning.evaluation import evaluate
 from ..learning.qtable import QTable, QTableStore, check_compatible, sensor_signature
-from ..learning.training import evaluate, train
+from ..learning.training import train
 from ..store.config import Config, apply_world
 from ..store.errors import KoolioError, QTableError
 from ..store.files import atomic_write, atomic_write_text

@@ -495,7 +495,7 @@ class LogWriter:
         return self._fh
 
     def write(self, result: Any) -> None:
-        """Append ``result.row()`` (an :class:`~koolio_pymunk.learning.training.EpisodeResult`)."""
+        """Append ``result.row()`` (an :class:`~koolio_pymunk.learning.episodes.EpisodeResult`)."""
         if self.path is None:
             return
         for message in self._later:

@@ -273,8 +273,6 @@ class World:
         for _ in range(n_robots):
             self._add_robot()
         self.heading = [0.0] * n_robots
-        self.awake = list(range(n_robots))
-        """Every robot (nothing sleeps: the space is never stepped); kept for callers."""
 
     @classmethod
     def from_arena(cls, arena: Arena, radius: float, n_robots: int = 1) -> World:
@@ -361,16 +359,10 @@ class World:
         self._cp.set_position(self.bodies[i], float(x), float(y))
 
     # -- actions --------------------------------------------------------------------
-    def act(
-        self,
-        actions: Sequence[int],
-        distance: float,
-        arc: float,
-        near_wall: Callable[[list[int], float], bool] | None = None,
-    ) -> None:
+    def act(self, actions: Sequence[int], distance: float, arc: float) -> None:
         """Perform one action per robot: rotations by ``arc`` radians, moves by ``distance``
         along the heading (Forward) or against it (Reverse), each a swept move
-        (:func:`sweep`). ``near_wall`` is accepted for old callers and not used."""
+        (:func:`sweep`)."""
         heading = self.heading
         for i, action in enumerate(actions):
             if action == _ROTATE_LEFT:

@@ -6,9 +6,11 @@ import csv
 
 import pytest
 
+from koolio_pymunk.learning.evaluation import evaluate
 from koolio_pymunk.learning.qtable import QTableStore, load_qtable
-from koolio_pymunk.learning.training import LOG_FIELDS, evaluate, train
+from koolio_pymunk.learning.training import train
 from koolio_pymunk.store.config import Config
+from koolio_pymunk.store.episode_log import LOG_FIELDS
 from koolio_pymunk.task.env import KoolioEnv
 
 

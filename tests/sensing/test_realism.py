@@ -12,7 +12,7 @@ import pytest
 
 from koolio_pymunk.apps.cli import main
 from koolio_pymunk.learning.qtable import QTable, QTableStore
-from koolio_pymunk.learning.training import LOG_FIELDS, train
+from koolio_pymunk.learning.training import train
 from koolio_pymunk.sensing.agreement import compare_backends, free_poses, same_readings
 from koolio_pymunk.sensing.realism import (
     F_BEAM,
@@ -26,6 +26,7 @@ from koolio_pymunk.sensing.realism import (
 from koolio_pymunk.sensing.realism_kernel import apply_realism
 from koolio_pymunk.sensing.suite import SensorSuite
 from koolio_pymunk.store.config import Config, SensorConfig, load_config
+from koolio_pymunk.store.episode_log import LOG_FIELDS
 from koolio_pymunk.store.errors import ConfigError, KoolioError
 from koolio_pymunk.store.realism_config import MotionRealism, RealismConfig
 from koolio_pymunk.task.env import KoolioEnv

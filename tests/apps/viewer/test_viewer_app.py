@@ -461,7 +461,7 @@ def test_bad_flags_one_line_error_exit_2(tmp_path, capsys, extra) -> None:
 
 def test_greedy_session_watches_the_episodes_of_eval(tmp_path, config) -> None:
     """``view --greedy`` shows the very episodes ``koolio-pm eval`` scores (same seed)."""
-    from koolio_pymunk.learning.training import evaluate
+    from koolio_pymunk.learning.evaluation import evaluate
 
     q = tmp_path / "q.qtable"
     env = KoolioEnv("room", config=config)
