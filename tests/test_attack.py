@@ -331,11 +331,11 @@ def test_temporary_files_of_interrupted_writes_are_removed_on_start(work, capsys
 
 
 def test_killed_sweep_worker_fails_only_its_run(tmp_path):
-    from koolio_pymunk.apps.sweep import WorkerDied, _Pool
+    from koolio_pymunk.apps.sweep import WorkerDied, run_pool
 
     results: dict[int, object] = {}
     tasks = [{"n": n} for n in range(5)]
-    _Pool(2, target=_die_on_two).run(tasks, lambda t, r: results.__setitem__(t["n"], r))
+    run_pool(tasks, 2, lambda t, r: results.__setitem__(t["n"], r), target=_die_on_two)
     assert {n: r for n, r in results.items() if n != 2} == {0: 0, 1: 10, 3: 30, 4: 40}
     assert isinstance(results[2], WorkerDied) and "SIGKILL" in str(results[2])
 
