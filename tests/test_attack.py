@@ -22,7 +22,7 @@ import time
 from pathlib import Path
 
 import pytest
-from inputs import edit_header, expect_error
+from inputs import edit_header, expect_error, open_table
 
 from koolio_pymunk import robot_runtime as rt
 from koolio_pymunk.apps import cli
@@ -692,7 +692,7 @@ def test_a_store_releases_its_lock_when_closed(tmp_path):
 
     layout = KeywordLayout((("A", 3),))
     with QTableStore(tmp_path / "t.qtable") as store:
-        store.open(layout, {}, 0.0)
+        open_table(store, layout, {}, 0.0)
         with pytest.raises(InUseError):
-            QTableStore(tmp_path / "t.qtable").open(layout, {}, 0.0)
-    QTableStore(tmp_path / "t.qtable").open(layout, {}, 0.0)
+            open_table(QTableStore(tmp_path / "t.qtable"), layout, {}, 0.0)
+    open_table(QTableStore(tmp_path / "t.qtable"), layout, {}, 0.0)

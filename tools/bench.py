@@ -245,9 +245,9 @@ def motion(poses: int, repeats: int = 5) -> dict:
 
     import numba
     import numpy as np
+    from move_agreement import free_points
 
     from koolio_pymunk.world.arena import load_arena
-    from koolio_pymunk.world.move_agreement import free_points
     from koolio_pymunk.world.physics import World
     from koolio_pymunk.world.segment_query import wall_array
     from koolio_pymunk.world.swept_move import move
@@ -494,7 +494,7 @@ def competence_subprocess(seed: int, args: argparse.Namespace, folder: Path) -> 
 
 
 def agreement_sample(poses: int) -> list[dict]:
-    from koolio_pymunk.sensing.agreement import compare_backends
+    from sensing_agreement import compare_backends
 
     return [compare_backends(a, poses, seed=9).as_dict() for a in ("hallway", "room", "obstacles")]
 

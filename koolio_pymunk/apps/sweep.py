@@ -115,10 +115,6 @@ SPEC_KEYS = (
     "eval_episodes",
     "competence",
 )
-#: Parameters that are not configuration paths.
-RUN_KEYS = ("arena", "goal", "world", "rotate_deg")
-#: Result columns that depend on the machine's speed (left out of comparisons).
-TIMING_COLUMNS = ("competence_seconds", "train_seconds")
 RESULT_COLUMNS = (
     "run_id",
     "config_id",

@@ -359,12 +359,12 @@ def backup_path(path: Path) -> Path:
 class QTableStore:
     """A Q-table file and its backup (``<file>.bak``), as the paper keeps them.
 
-    :meth:`open` locks the table (one writer at a time), reads it (creating both files
-    empty when missing); :meth:`save` writes the new table, makes the previous good one
-    the backup, then puts the new one in place, each step atomic and one fsync in all;
-    :meth:`close` releases the lock. ``open`` is :meth:`load` then, for a new table,
-    :meth:`create`: a caller that must check something before any file is written (the
-    training log) calls them itself.
+    :meth:`load` locks the table (one writer at a time) and reads it, or makes a new
+    empty one without writing (:attr:`fresh`); :meth:`create` writes a new table's files,
+    once what must be checked before any file is written (the training log) is checked;
+    :meth:`save` writes the new table, makes the previous good one the backup, then puts
+    the new one in place, each step atomic and one fsync in all; :meth:`close` releases
+    the lock.
     """
 
     def __init__(self, path: str | Path, warn=None, purpose: str = "koolio-pm") -> None:
@@ -382,21 +382,6 @@ class QTableStore:
         """True from :meth:`create` (a new table, or one started from another with
         ``--init-qtable``) to :meth:`close`: the run holding the lock made it, so its log
         must be new too."""
-
-    def open(
-        self,
-        layout: KeywordLayout,
-        sensors: dict[str, Any],
-        q_init: float,
-        arena: dict[str, str] | None = None,
-        record: dict[str, str] | None = None,
-    ) -> QTable:
-        """Lock, then load the table (checking it was made for ``layout`` and ``sensors``;
-        a table learned in another ``arena`` gives a warning), or create it."""
-        table = self.load(layout, sensors, q_init, arena, record)
-        if self.fresh:
-            self.create(table)
-        return table
 
     @property
     def locked(self) -> bool:

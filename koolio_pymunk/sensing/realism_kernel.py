@@ -239,6 +239,12 @@ def apply_realism(
     (``crossed``), the cameras' missed detections (``missed[c] = [goal, marker]``) and
     misread plates; the sonar entries of ``raw`` are only rewritten when a sonar model
     is on, the camera entries when a camera model is on (see the reference).
+
+    Why it ships though only the tests call it: it is the models alone, compiled, the
+    same model functions that :func:`sense_realism` runs inline between the reading and
+    the read-out, so ``tests/sensing/test_realism.py`` can hold them to the reference
+    :func:`~koolio_pymunk.sensing.realism.apply_reference` reading by reading, on the
+    same draws.
     """
     n = rays.shape[0]
     _sonar(raw, rays, ray_cos, draws, 0, params, flags, neighbours, echo, crossed)

@@ -60,8 +60,8 @@ own queries see them where they are.
 Example::
 
     >>> from koolio_pymunk.world.physics import World, Action
-    >>> w = World.from_segments([((0, 0), (100, 0)), ((100, 0), (100, 100)),
-    ...                          ((100, 100), (0, 100)), ((0, 100), (0, 0))], radius=10)
+    >>> w = World([((0, 0), (100, 0)), ((100, 0), (100, 100)),
+    ...            ((100, 100), (0, 100)), ((0, 100), (0, 0))], radius=10)
     >>> w.place(0, (50, 50), 0.0)
     >>> w.act([Action.FORWARD], distance=12, arc=0.1)
     >>> w.x[0], w.y[0]
@@ -278,12 +278,6 @@ class World:
     def from_arena(cls, arena: Arena, radius: float, n_robots: int = 1) -> World:
         """A world holding ``arena``'s walls and obstacles (``rotate_deg`` applied)."""
         return cls(arena.to_world().segments(), radius, n_robots)
-
-    @classmethod
-    def from_segments(
-        cls, segments: Sequence[tuple[Point, Point]], radius: float, n_robots: int = 1
-    ) -> World:
-        return cls(segments, radius, n_robots)
 
     def _add_walls(self, k: int) -> tuple[list[pymunk.Segment], list[pymunk.Circle]]:
         """Add robot ``k``'s copy of the walls (shifted by its offset along x): thin

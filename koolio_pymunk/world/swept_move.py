@@ -26,8 +26,8 @@ Example::
 
     >>> from koolio_pymunk.world.physics import World
     >>> from koolio_pymunk.world.segment_query import wall_array
-    >>> w = World.from_segments([((0, 0), (100, 0)), ((100, 0), (100, 100)),
-    ...                          ((100, 100), (0, 100)), ((0, 100), (0, 0))], radius=10)
+    >>> w = World([((0, 0), (100, 0)), ((100, 0), (100, 100)),
+    ...            ((100, 100), (0, 100)), ((0, 100), (0, 0))], radius=10)
     >>> walls = wall_array(w)
     >>> move(walls, 50.0, 50.0, 0.0, 12.0, 10.0)
     (62.0, 50.0)
