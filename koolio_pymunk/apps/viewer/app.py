@@ -106,20 +106,10 @@ def _size(text: str) -> tuple[int, int]:
 MAX_STEPS = 10**12
 
 
-def _speed(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not SPEED_MIN <= v <= SPEED_MAX:
-        raise argparse.ArgumentTypeError(f"must be in {SPEED_MIN:g}..{SPEED_MAX:g}, got {v:g}")
-    return v
-
-
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """The flags of ``train`` plus the window's own."""
     from ..cli import add_env_args, add_learning_files_args
-    from ..flags import MAX_EPISODES, int_type
+    from ..flags import MAX_EPISODES, float_type, int_type
 
     add_env_args(p)
     p.add_argument(
@@ -170,7 +160,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--clockless", action="store_true", help="start in clockless mode")
     p.add_argument(
         "--speed",
-        type=_speed,
+        type=float_type(SPEED_MIN, SPEED_MAX),
         default=10.0,
         help=f"clock speed, steps per second ({SPEED_MIN:g}..{SPEED_MAX:g}, default 10)",
     )
