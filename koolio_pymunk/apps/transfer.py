@@ -480,7 +480,7 @@ class TransferResult:
             "format": FORMAT,
             "version": VERSION,
             "settings": {f.name: _plain(getattr(self.cfg, f.name)) for f in fields(self.cfg)},
-            "summary": summary(self.runs, self.cfg),
+            "summary": summary(self.runs),
             "runs": self.runs,
             "timing": {"seconds": self.seconds, "runs": self.timing},
         }
@@ -540,7 +540,7 @@ def write_json(result: TransferResult, path: Path) -> None:
     atomic_write_text(path, json.dumps(result.as_dict(), indent=1) + "\n")
 
 
-def summary(runs: list[dict[str, Any]], cfg: TransferConfig) -> dict[str, Any]:
+def summary(runs: list[dict[str, Any]]) -> dict[str, Any]:
     """Per table, over seeds: greedy goal rates, the ideal-to-real drop, recoveries."""
     out: dict[str, Any] = {}
     for source in SOURCES:
