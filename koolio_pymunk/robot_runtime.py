@@ -1613,7 +1613,7 @@ class Model:
     def from_json(cls, data: Any, layout: Layout | None = None) -> Model:
         """A model from its JSON form (None: an empty model); PolicyError when malformed.
 
-        Checked as the simulator's ``dyna.Model.from_bytes`` checks its section: states
+        Checked as the simulator's ``dyna_model.Model.from_bytes`` checks its section: states
         inside ``layout`` (:func:`state_problem`), actions in its action set, rewards,
         flags and counts by :func:`outcome_problem`, each pair's total at most
         :data:`MAX_COUNT`, no pair or outcome twice.

@@ -27,8 +27,7 @@ from typing import NoReturn
 from .. import __version__
 from ..store.errors import KoolioError, located
 from ..store.interrupts import exit_status
-from .flags import MAX_EPISODES, episodes_type, float_type, int_type
-from .flags import seed_type as seed_type
+from .flags import MAX_EPISODES, episodes_type, float_type, int_type, seed_type
 
 DEFAULT_QTABLE = "runs/hallway.qtable"
 DEFAULT_LOG = "runs/hallway.csv"
