@@ -67,7 +67,7 @@ import random
 import shutil
 import stat
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 FORMAT = "koolio-policy"
@@ -85,7 +85,7 @@ MAX_PLANNING_STEPS = 10_000
 #: The paper's five actions; an action's index is the low bits of the keyword.
 ACTION_NAMES = ("Stop", "RotateLeft", "RotateRight", "Forward", "Reverse")
 STOP = 0
-#: Columns of the per-episode log (identical to ``koolio-pm train``'s log).
+#: Columns of the per-episode log: ``koolio-pm train`` writes the same (it reads them here).
 LOG_FIELDS = ("episode", "reward", "steps", "bumps", "outcome", "rescued", "epsilon", "goal")
 #: Events of :meth:`Policy.judge`, in the paper's order of priority (first wins).
 EVENTS = ("goal", "end_of_world", "bump", "stop", "reverse", "turn", "forward")
@@ -1281,7 +1281,7 @@ class EpisodeLog:
     def _write(self, row: list[str]) -> None:
         buf = io.StringIO()
         csv.writer(buf, lineterminator="\n").writerow(row)
-        with open(self.path, "a", encoding="utf-8", newline="", opener=_open_append) as fh:
+        with open(self.path, "a", encoding="utf-8", newline="", opener=open_append) as fh:
             fh.write(buf.getvalue())
             fh.flush()
             os.fsync(fh.fileno())
@@ -1311,13 +1311,18 @@ class EpisodeLog:
         )
 
 
-def _open_append(path: str, flags: int) -> int:
-    """``open()``'s opener of the log: never waiting (a FIFO is an error, not a hang)."""
+def open_append(
+    path: str, flags: int, refuse: Callable[[str, int], Exception] = _not_regular
+) -> int:
+    """``open()``'s opener of a log (the robot's, and the simulator's
+    ``store.episode_log``): never waiting (a FIFO with no reader is an error, not a
+    hang), a regular file only: ``refuse(path, mode)`` is raised for anything else (a
+    :class:`PolicyError` here)."""
     fd = os.open(path, flags | getattr(os, "O_NONBLOCK", 0), 0o666)
     mode = os.fstat(fd).st_mode
     if not stat.S_ISREG(mode):
         os.close(fd)
-        raise _not_regular(path, mode)
+        raise refuse(path, mode)
     return fd
 
 
@@ -1537,12 +1542,11 @@ class Traces:
 
 
 class Model:
-    """Dyna-Q's model: the simulator's ``dyna.Model``, stdlib copy.
-
-    Every (state, action) pair seen, first seen first, with every distinct outcome
-    ``[next_state, reward, terminal, count]``. :meth:`sample` draws a pair uniformly
-    (``int(u1 * n_pairs)``) and an outcome in proportion to its count (the first whose
-    cumulative count exceeds ``u2 * total``).
+    """Dyna-Q's model, the simulator's too (its ``dyna_model.Model`` adds the Q-table
+    file's section): every (state, action) pair seen, first seen first, with every
+    distinct outcome ``[next_state, reward, terminal, count]``. :meth:`sample` draws a
+    pair uniformly (``int(u1 * n_pairs)``) and an outcome in proportion to its count (the
+    first whose cumulative count exceeds ``u2 * total``).
 
     >>> m = Model()
     >>> m.record(5, 3, -0.5, 6, False); m.record(5, 3, -5.0, 7, False)
@@ -1552,25 +1556,44 @@ class Model:
 
     def __init__(self) -> None:
         self.pairs: list[tuple[int, int]] = []
+        """``(state, action)`` in first-seen order."""
         self.outcomes: list[list[list]] = []
+        """Per pair: ``[next_state, reward, terminal, count]`` in first-seen order."""
         self.totals: list[int] = []
+        """Per pair: the sum of its counts."""
         self._index: dict[tuple[int, int], int] = {}
+        self._outcome: list[dict[tuple[int, float, bool], list]] = []
+
+    def __len__(self) -> int:
+        return len(self.pairs)
+
+    def __contains__(self, pair: tuple[int, int]) -> bool:
+        return pair in self._index
 
     def record(self, state: int, action: int, reward: float, nxt: int, terminal: bool) -> None:
+        """Count one real transition."""
         i = self._index.get((state, action))
         if i is None:
-            i = len(self.pairs)
-            self._index[(state, action)] = i
-            self.pairs.append((state, action))
-            self.outcomes.append([])
-            self.totals.append(0)
-        for out in self.outcomes[i]:
-            if out[0] == nxt and out[1] == reward and out[2] == terminal:
-                out[3] += 1
-                break
-        else:
-            self.outcomes[i].append([nxt, reward, terminal, 1])
+            i = self.add(state, action, [])
+        key = (nxt, reward, terminal)
+        out = self._outcome[i].get(key)
+        if out is None:
+            out = [nxt, reward, terminal, 0]
+            self._outcome[i][key] = out
+            self.outcomes[i].append(out)
+        out[3] += 1
         self.totals[i] += 1
+
+    def add(self, state: int, action: int, outcomes: list[list]) -> int:
+        """Append a pair not in the model with its ``outcomes`` (a file's, in order); its
+        index."""
+        i = len(self.pairs)
+        self._index[(state, action)] = i
+        self.pairs.append((state, action))
+        self.outcomes.append(outcomes)
+        self.totals.append(sum(o[3] for o in outcomes))
+        self._outcome.append({(o[0], o[1], o[2]): o for o in outcomes})
+        return i
 
     def sample(self, u1: float, u2: float) -> tuple[int, int, float, int, bool]:
         i = int(u1 * len(self.pairs))
@@ -1595,7 +1618,7 @@ class Model:
     def from_json(cls, data: Any, layout: Layout | None = None) -> Model:
         """A model from its JSON form (None: an empty model); PolicyError when malformed.
 
-        Checked as the simulator's ``dyna.Model.from_bytes`` checks its section: states
+        Checked as the simulator's ``dyna_model.Model.from_bytes`` checks its section: states
         inside ``layout`` (:func:`state_problem`), actions in its action set, rewards,
         flags and counts by :func:`outcome_problem`, each pair's total at most
         :data:`MAX_COUNT`, no pair or outcome twice.
@@ -1609,15 +1632,13 @@ class Model:
         for i, item in enumerate(pairs):
             ok = isinstance(item, list) and len(item) == 3 and isinstance(item[2], list)
             ok = ok and _is_int(item[0]) and _is_int(item[1]) and bool(item[2])
-            if not ok or (item[0], item[1]) in model._index:
+            if not ok or (item[0], item[1]) in model:
                 raise PolicyError(f"pairs[{i}]: expected a new [state, action, [outcome, ...]]")
             problem = None
             if layout is not None:
                 problem = state_problem(item[0], layout) or action_problem(item[1], layout)
             if problem:
                 raise PolicyError(f"pairs[{i}]: {problem}")
-            model._index[(item[0], item[1])] = i
-            model.pairs.append((item[0], item[1]))
             outs = []
             seen = set()
             for o in item[2]:
@@ -1637,8 +1658,7 @@ class Model:
             total = sum(o[3] for o in outs)
             if total > MAX_COUNT:
                 raise PolicyError(f"pairs[{i}]: counts sum to {total}, more than 2**53")
-            model.outcomes.append(outs)
-            model.totals.append(total)
+            model.add(item[0], item[1], outs)
         return model
 
 

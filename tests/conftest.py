@@ -3,11 +3,17 @@
 from __future__ import annotations
 
 import signal
+import sys
 from pathlib import Path
 
 import pytest
 
 from koolio_pymunk.apps import cli
+
+# The agreement modules of the compiled twins (``tools/sensing_agreement.py``,
+# ``tools/move_agreement.py``) serve the tests and the tools, and live with the tools:
+# the tests import them as the tools do, from ``tools/``.
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
 
 # Ctrl-C is part of what the tests check. A shell without job control starts a
 # background job with SIGINT ignored, and an ignored signal stays ignored in every

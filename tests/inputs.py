@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from koolio_pymunk.apps import cli
-from koolio_pymunk.learning.qtable import MAGIC, QTable, sensor_signature
+from koolio_pymunk.learning.qtable import MAGIC, QTable, QTableStore, sensor_signature
 from koolio_pymunk.store.config import Config, state_fields
 from koolio_pymunk.store.keyword import KeywordLayout
 from koolio_pymunk.world.arena import arena_record, load_arena
@@ -61,6 +61,15 @@ def expect_error(
 
 
 # -- tables -----------------------------------------------------------------------------------
+def open_table(store: QTableStore, *args: object) -> QTable:
+    """``store``'s table, locked: loaded (:meth:`QTableStore.load`'s arguments), or a new
+    one created (its files written), as a run opens its table."""
+    table = store.load(*args)
+    if store.fresh:
+        store.create(table)
+    return table
+
+
 def small_table() -> QTable:
     """Three visited states of the default configuration's layout, 3 episodes, learned in
     the room (every header field a table of this version writes)."""

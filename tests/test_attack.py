@@ -22,7 +22,7 @@ import time
 from pathlib import Path
 
 import pytest
-from inputs import edit_header, expect_error
+from inputs import edit_header, expect_error, open_table
 
 from koolio_pymunk import robot_runtime as rt
 from koolio_pymunk.apps import cli
@@ -328,11 +328,11 @@ def test_temporary_files_of_interrupted_writes_are_removed_on_start(work, capsys
 
 
 def test_killed_sweep_worker_fails_only_its_run(tmp_path):
-    from koolio_pymunk.apps.sweep import WorkerDied, _Pool
+    from koolio_pymunk.apps.sweep import WorkerDied, run_pool
 
     results: dict[int, object] = {}
     tasks = [{"n": n} for n in range(5)]
-    _Pool(2, target=_die_on_two).run(tasks, lambda t, r: results.__setitem__(t["n"], r))
+    run_pool(tasks, 2, lambda t, r: results.__setitem__(t["n"], r), target=_die_on_two)
     assert {n: r for n, r in results.items() if n != 2} == {0: 0, 1: 10, 3: 30, 4: 40}
     assert isinstance(results[2], WorkerDied) and "SIGKILL" in str(results[2])
 
@@ -700,7 +700,7 @@ def test_a_store_releases_its_lock_when_closed(tmp_path):
 
     layout = KeywordLayout((("A", 3),))
     with QTableStore(tmp_path / "t.qtable") as store:
-        store.open(layout, {}, 0.0)
+        open_table(store, layout, {}, 0.0)
         with pytest.raises(InUseError):
-            QTableStore(tmp_path / "t.qtable").open(layout, {}, 0.0)
-    QTableStore(tmp_path / "t.qtable").open(layout, {}, 0.0)
+            open_table(QTableStore(tmp_path / "t.qtable"), layout, {}, 0.0)
+    open_table(QTableStore(tmp_path / "t.qtable"), layout, {}, 0.0)

@@ -4,6 +4,7 @@ the table header's checks."""
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 
 import pytest
@@ -152,7 +153,12 @@ def test_unknown_header_keys_are_kept() -> None:
 
 @pytest.mark.parametrize("levels", [2, 3, 4, 5, 2**16, 2**53, 2**53 + 1, 2**62 + 1])
 def test_field_bits_are_exact(levels: int) -> None:
-    """One count of bits: the simulator's layout and the robot's agree, even where a
-    float log2 would round (2**53 + 1 levels need 54 bits)."""
-    assert KeywordLayout((("A", levels),)).bits == (field_bits(levels),)
-    assert field_bits(levels) == (levels - 1).bit_length()
+    """A field gets the fewest bits that hold its largest code, counted in integers even
+    where a float log2 would round (2**53 + 1 levels need 54 bits, ``ceil(log2)`` says
+    53), and that code comes back out of a keyword. (The table's layout is the robot's,
+    :class:`~koolio_pymunk.robot_runtime.Layout`: one count for both.)"""
+    fewest = next(b for b in itertools.count(1) if 1 << b >= levels)
+    assert KeywordLayout((("A", levels),)).bits == (fewest,)
+    assert field_bits(levels) == fewest
+    lay = KeywordLayout((("A", levels), ("B", 3)))
+    assert lay.decode(lay.keyword((levels - 1, 2), 4)) == ((levels - 1, 2), 4)

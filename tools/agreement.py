@@ -2,19 +2,19 @@
 
 For each arena and world (``--worlds``: the ideal world and ``koolio-real`` by default),
 ``--poses`` random free poses (noise off unless ``--noise``): counts the poses whose
-noise-free distances differ by more than 1e-6 in (or whose camera markers differ; with
+noise-free distances differ in any bit (or whose camera markers differ; with
 realism models on, also each ray's incidence and the other plates in view), the poses
 whose encoded state or readings after the realism models differ, and the poses whose
-every distance is bit-identical (:func:`koolio_pymunk.sensing.agreement.compare_backends`);
+every distance is bit-identical (:func:`sensing_agreement.compare_backends`);
 then, in the ideal world, how often the exact-cone sonar model (``sensors.backend:
 cone``) encodes differently from the paper's sub-arcs
-(:func:`koolio_pymunk.sensing.agreement.cone_disagreement`). Arena/world pairs run in parallel,
+(:func:`sensing_agreement.cone_disagreement`). Arena/world pairs run in parallel,
 one process each (``--jobs``). Exits 1 on any fast/reference mismatch.
 
 ``--moves N`` also checks the compiled swept move (``koolio_pymunk.world.swept_move``)
 against the pymunk world's (``World.move``) on ``N`` random moves per shipped arena and
 per generated arena (``--generated K``, default 4: jittered and turned shipped arenas,
-star-shaped rooms with obstacles; ``koolio_pymunk.world.move_agreement``): the moves
+star-shaped rooms with obstacles; ``tools/move_agreement.py``): the moves
 whose end positions differ in any bit (exit 1 if any), the moves that met a wall or
 started touching one, and the smallest clearance to a wall after a move. ``--poses 0``
 skips the sensors.
@@ -52,7 +52,7 @@ IDEAL = "ideal"
 
 
 def one(arena: str, poses: int, seed: int, noise: str, world: str) -> dict:
-    from koolio_pymunk.sensing.agreement import compare_backends, cone_disagreement
+    from sensing_agreement import compare_backends, cone_disagreement
 
     t = time.perf_counter()
     laid = None if world == IDEAL else world
@@ -66,7 +66,7 @@ def one(arena: str, poses: int, seed: int, noise: str, world: str) -> dict:
 
 def one_moves(arena: str | int, moves: int, seed: int, generated: int) -> dict:
     """Move agreement in a shipped arena (a name) or generated arena number ``arena``."""
-    from koolio_pymunk.world.move_agreement import compare_moves, generated_arenas
+    from move_agreement import compare_moves, generated_arenas
 
     laid = arena if isinstance(arena, str) else generated_arenas(generated, seed)[arena]
     return compare_moves(laid, moves, seed=seed).as_dict()

@@ -22,7 +22,8 @@ Sections (each printed as a table row, all written to ``--out`` as JSON):
 * **IR-SIM, same run**: IR-SIM (``ir-sim``, the ``compare`` extra) stepping the same
   hallway with an 88-beam lidar (``tools/irsim_compare.py``, collision mode ``stop``), and
   the end-to-end row's ratio to it; skipped with a note when ir-sim is not installed;
-* **N robots**: :func:`multi.train_many` with ``--robots`` robots, robot-steps per second;
+* **N robots**: ``learning.fleet.train_many`` with ``--robots`` robots, robot-steps per
+  second;
 * **motion**: the cost of one 12-inch move from the same seeded random free poses of the
   hallway (near a wall: within 12 in of one): the pymunk world's (``World.move``), the
   compiled move (``swept_move.move``) called from Python, and per move inside one
@@ -250,9 +251,9 @@ def motion(poses: int, repeats: int = 5) -> dict:
 
     import numba
     import numpy as np
+    from move_agreement import free_points
 
     from koolio_pymunk.world.arena import load_arena
-    from koolio_pymunk.world.move_agreement import free_points
     from koolio_pymunk.world.physics import World
     from koolio_pymunk.world.segment_query import wall_array
     from koolio_pymunk.world.swept_move import move
@@ -505,7 +506,7 @@ def competence_subprocess(seed: int, args: argparse.Namespace, folder: Path) -> 
 
 
 def agreement_sample(poses: int) -> list[dict]:
-    from koolio_pymunk.sensing.agreement import compare_backends
+    from sensing_agreement import compare_backends
 
     return [compare_backends(a, poses, seed=9).as_dict() for a in ("hallway", "room", "obstacles")]
 

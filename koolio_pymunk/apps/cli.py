@@ -27,8 +27,7 @@ from typing import NoReturn
 from .. import __version__
 from ..store.errors import KoolioError, located
 from ..store.interrupts import exit_status
-from .flags import MAX_EPISODES, episodes_type, file_name, float_type, int_type
-from .flags import seed_type as seed_type
+from .flags import MAX_EPISODES, episodes_type, file_name, float_type, int_type, seed_type
 
 DEFAULT_QTABLE = "runs/hallway.qtable"
 DEFAULT_LOG = "runs/hallway.csv"
@@ -412,18 +411,10 @@ def warn_endless(cfg) -> None:
         )
 
 
-def _positive(value: int, flag: str) -> None:
-    if value < 0:
-        raise KoolioError(f"{flag}: must be >= 0, got {value}")
-
-
 def cmd_train(args: argparse.Namespace) -> int:
     from ..learning.qtable import QTableStore
     from ..learning.training import RunFiles, train
 
-    _positive(args.episodes, "--episodes")
-    if not 1 <= args.robots <= MAX_ROBOTS:
-        raise KoolioError(f"--robots: must be in 1..{MAX_ROBOTS}, got {args.robots}")
     checks = _eval_every_args(args)
     board = Path(args.tensorboard) if args.tensorboard is not None else None
     if board is not None and board.exists() and not board.is_dir():
@@ -748,7 +739,6 @@ def cmd_eval(args: argparse.Namespace) -> int:
     from ..learning.qtable import check_compatible, sensor_signature
     from ..world.arena import arena_record
 
-    _positive(args.episodes, "--episodes")
     eps = args.epsilon
     goal_all = args.goal == "all"
     if goal_all:

@@ -238,7 +238,7 @@ def policy_document(
         "format": rt.FORMAT,
         "version": rt.VERSION,
         "written_by": WRITTEN_BY,
-        "layout": rt.Layout(lay.fields, lay.n_actions).to_json(),
+        "layout": lay.to_json(),
         "actions": list(rt.ACTION_NAMES[: lay.n_actions]),
         "encoding": rt.encoding_json(rt.Encoder(encoding)),
         "sensors": sensors,
@@ -316,8 +316,6 @@ def table_from_policy(policy: rt.Policy) -> QTable:
     """The simulator's QTable of a loaded policy (layout, sensors, episodes, rows)."""
     lay = policy.layout
     layout = KeywordLayout(tuple(zip(lay.names, lay.levels)), lay.n_actions)
-    if layout.bits != lay.bits or layout.shifts != lay.shifts:  # pragma: no cover
-        raise QTableError(f"{policy.source}: layout: keyword bits differ from the simulator's")
     meta: dict[str, Any] = {"sensors": policy.sensors, "episodes": policy.episodes}
     arena = policy.extra.get("arena")
     if isinstance(arena, dict) and all(isinstance(arena.get(k), str) for k in ("name", "sha256")):

@@ -599,8 +599,6 @@ def run(args: argparse.Namespace) -> int:
     from .cli import DEFAULT_LOG
     from .flags import check_png
 
-    if args.window < 1:
-        raise KoolioError(f"--window: must be >= 1, got {args.window}")
     paths = [*args.logs, *(args.log or [])] or [DEFAULT_LOG]
     out = Path(args.out) if args.out is not None else default_out(paths)
     check_png(out, "--out")

@@ -31,8 +31,8 @@ local processes (``--workers N``) or as Ray tasks (``--ray [ADDRESS]``), and wri
                                    #  rotate_deg: [0, 5] the arena's rotation)
     runs:                      # and/or a list of named override sets (each combined
       - {name: soft-bumps, rewards.bump: -2}   #  with every grid combination)
-    eval_every: 100            # greedy evaluation every K episodes (default episodes/10)
-    eval_episodes: 20          # episodes per greedy evaluation
+    eval_every: 100            # greedy check every K episodes (default episodes/10)
+    eval_episodes: 20          # episodes per greedy check
     competence: 0.9            # goal rate that counts as competent
 
 **Results.** ``final_goal_rate``, ``final_mean_steps``, ``final_mean_bumps`` and
@@ -45,12 +45,17 @@ from one checkpoint to the next);
 then; ``train_*`` summarise the training episodes themselves; ``table_sha256`` identifies
 the final Q-table.
 
-**Reproducibility.** A run depends only on its configuration and seed (training seed
-``s``, evaluation seed ``1000000 + s``), never on scheduling: local processes and Ray give
-identical rows apart from the two timing columns (``competence_seconds``,
-``train_seconds``). A run works in a private temporary directory and returns its files to
-the driver, which writes them, so Ray workers need no shared filesystem (but need
-``koolio-pymunk`` installed).
+**Checkpoints.** A run's greedy evaluations are the periodic checks of ``koolio-pm train
+--eval-every K --eval-episodes M`` (:class:`~koolio_pymunk.learning.evaluation.PeriodicCheck`,
+with the run's seed): a run and ``train --seed s --eval-every K`` check the same tables on
+the same episodes. A last stretch shorter than ``eval_every`` ends with the same
+evaluation of the final table.
+
+**Reproducibility.** A run depends only on its configuration and seed ``s``, never on
+scheduling: local processes and Ray give identical rows apart from the two timing
+columns (``competence_seconds``, ``train_seconds``). A run works in a private temporary
+directory and returns its files to the driver, which writes them, so Ray workers need no
+shared filesystem (but need ``koolio-pymunk`` installed).
 
 **Resume.** Running the same command again skips every run that has a row in
 ``results.csv`` (or a ``result.json``); an interrupted run is redone from its start. A
@@ -61,12 +66,13 @@ with runs the folder's finished ones are not (another value, ``--world``, defaul
 refused, and so is a folder that is neither empty nor a sweep's.
 
 **Faults.** A sweep holds a lock on its output folder (``.sweep.lock``): a second sweep
-into the same folder is refused. Local workers are processes of this module's own pool:
-a worker that dies (killed, out of memory) fails only the run it was running, which is
-reported, and a new worker takes the remaining runs (as on Ray, where a lost task fails
-alone). Each run works in a temporary folder named after its process
-(``koolio-sweep-<pid>-...``); folders of processes that no longer run (a killed worker)
-are removed when the next run starts.
+into the same folder is refused. Local workers are standard-library process pools of one
+process each (:func:`run_pool`): a worker that dies (killed, out of memory) fails only
+the run it was running, which is reported, and a new worker takes the remaining runs (as
+on Ray, where a lost task fails alone). Each run works in a temporary folder named after
+its process (``koolio-sweep-<pid>-...``); folders of processes that no longer run (a
+killed worker) are removed when the next run starts. Stopped (Ctrl-C, SIGTERM), a sweep
+stops its workers' runs and ends; killed (SIGKILL), its workers end within a second.
 """
 
 from __future__ import annotations
@@ -109,10 +115,6 @@ SPEC_KEYS = (
     "eval_episodes",
     "competence",
 )
-#: Parameters that are not configuration paths.
-RUN_KEYS = ("arena", "goal", "world", "rotate_deg")
-#: Result columns that depend on the machine's speed (left out of comparisons).
-TIMING_COLUMNS = ("competence_seconds", "train_seconds")
 RESULT_COLUMNS = (
     "run_id",
     "config_id",
@@ -137,7 +139,6 @@ RESULT_COLUMNS = (
     "train_seconds",
     "table_sha256",
 )
-EVAL_SEED_OFFSET = 1_000_000
 #: Most runs (configurations x seeds) one spec may plan.
 MAX_RUNS = 10_000
 #: Most parallel processes of ``--workers``.
@@ -187,24 +188,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--dry-run", action="store_true", help="list the runs and exit")
 
 
-#: Settings added after sweeps existed, left out of a configuration's digest at their
-#: neutral value, so an earlier sweep's folder keeps its configuration ids: (section,
-#: key) -> neutral value.
-ADDED_LATER = {("learner", "no_undo"): False}
-
-
-def digest_view(config: dict[str, Any]) -> dict[str, Any]:
-    """The configuration as its id's digest sees it: :data:`ADDED_LATER`'s settings at
-    their neutral value left out.
-
-    >>> digest_view({"learner": {"alpha": 0.2, "no_undo": False}})
-    {'learner': {'alpha': 0.2}}
-    """
-    out = {k: dict(v) if isinstance(v, dict) else v for k, v in config.items()}
-    for (section, key), neutral in ADDED_LATER.items():
-        if out.get(section, {}).get(key, neutral) == neutral:
-            out.get(section, {}).pop(key, None)
-    return out
+#: How a run's checkpoints are made, in every configuration's digest: the periodic checks
+#: of ``koolio-pm train --eval-every`` (the run's seed). Sweeps made before evaluated with
+#: seed ``1,000,000 + s``; their folders are refused rather than mixed with new runs.
+CHECKS = "train --eval-every"
 
 
 def run(args: argparse.Namespace) -> int:
@@ -215,8 +202,6 @@ def run(args: argparse.Namespace) -> int:
         apply_world(load_config(), args.world)  # a bad name or file: one line naming --world
         spec.world = args.world
     out = Path(args.out) if args.out else Path("sweeps") / spec.name
-    if args.workers is not None and args.workers < 1:
-        raise KoolioError(f"--workers: must be >= 1, got {args.workers}")
     tasks = plan(spec)
     if args.dry_run:
         configs = {t["config_id"]: t["label"] for t in tasks}
@@ -497,8 +482,7 @@ def plan(spec: SweepSpec) -> list[dict[str, Any]]:
                 "eval_episodes": spec.eval_episodes,
                 "competence": spec.competence,
             }
-            hashed = {**settings, "config": digest_view(settings["config"]),
-                      "arena_content": repr(arena_obj)}  # fmt: skip
+            hashed = {**settings, "arena_content": repr(arena_obj), "checks": CHECKS}
             digest = hashlib.sha256(
                 json.dumps(hashed, sort_keys=True, default=str).encode()
             ).hexdigest()[:8]
@@ -547,7 +531,11 @@ def _slug(label: str) -> str:
 def run_one(task: dict[str, Any]) -> dict[str, Any]:
     """Train and evaluate one run in a private temporary folder.
 
-    Returns ``{"row": result row, "files": {name: bytes}}``; the driver writes the
+    The checkpoints are ``koolio-pm train --eval-every``'s checks
+    (:class:`~koolio_pymunk.learning.evaluation.PeriodicCheck`: the run's seed, so a run
+    and ``train --seed S --eval-every K`` check the same tables on the same episodes); a
+    last stretch shorter than ``eval_every`` ends with the same evaluation of the final
+    table. Returns ``{"row": result row, "files": {name: bytes}}``; the driver writes the
     files. Depends only on the task (never on the process or node).
     """
     from ..learning.evaluation import evaluate
@@ -564,6 +552,7 @@ def run_one(task: dict[str, Any]) -> dict[str, Any]:
         env.world_name = world_name(cfg, task["world"])
     seed = int(task["seed"])
     episodes, every = int(task["episodes"]), int(task["eval_every"])
+    checked = int(task["eval_episodes"])
     checkpoints: list[dict[str, Any]] = []
     competence: tuple[int, float] | None = None
     train_seconds = 0.0
@@ -573,15 +562,19 @@ def run_one(task: dict[str, Any]) -> dict[str, Any]:
         store = QTableStore(Path(tmp) / "qtable.qtable", warn=lambda msg: None)
         log = Path(tmp) / "train.csv"
         done = 0
-        while done < episodes:
+        while done < episodes:  # a stretch of eval_every episodes, ending in its check
             n = min(every, episodes - done)
-            res = train(env, store, n, seed, log, report=None)
+            res = train(
+                env, store, n, seed, log, report=None, eval_every=every, eval_episodes=checked
+            )
             if res.interrupted:
                 raise KeyboardInterrupt
             results.extend(res.results)
-            train_seconds += res.seconds
+            train_seconds += res.seconds - sum(c.seconds for c in res.checks)
             done += n
-            ev = evaluate(env, res.table, int(task["eval_episodes"]), EVAL_SEED_OFFSET + seed)
+            # the stretch's check; after a last stretch shorter than eval_every, the same
+            # evaluation of the final table (the check train would make at a multiple)
+            ev = res.checks[-1].result if res.checks else evaluate(env, res.table, checked, seed)
             checkpoints.append(
                 {
                     "episode": done,
@@ -830,7 +823,10 @@ def _spec_change(path: Path, text: str) -> str:
             was = "nothing" if a is None else shown(a.strip(), 60)
             now = "nothing" if b is None else shown(b.strip(), 60)
             return f"spec.yaml line {i} was {was}, now {now}"
-    return "the same spec.yaml: its runs had another --world, other defaults or arena path"
+    return (
+        "the same spec.yaml: its runs had another --world, other defaults (an earlier "
+        "version's) or arena path"
+    )
 
 
 def _run_locked(
@@ -944,102 +940,122 @@ def _run_local(
                 result = exc
             finish(t, result)
         return
-    _Pool(min(n, len(todo))).run(todo, finish)
+    run_pool(todo, min(n, len(todo)), finish)
 
 
 class WorkerDied(RuntimeError):
     """A local worker process ended while it ran a run (killed, out of memory ...)."""
 
 
-class _Pool:
-    """Worker processes, each running one task at a time sent through its own pipe.
+def run_pool(
+    todo: list[dict[str, Any]],
+    size: int,
+    finish: Callable[[dict[str, Any], Any], None],
+    target: Callable[[dict[str, Any]], Any] = run_one,
+) -> None:
+    """Run ``target`` (a module-level function: it is pickled) on every task in ``size``
+    worker processes, in order, calling ``finish(task, result)`` as each ends; ``result``
+    is what ``target`` returned or the exception it raised.
 
-    Unlike ``concurrent.futures.ProcessPoolExecutor`` (whose every pending future fails
-    with ``BrokenProcessPool`` when one worker dies), a dead worker fails only its own
-    task; a new worker takes its place for the tasks left.
-    """
+    Each worker is the standard library's ``concurrent.futures.ProcessPoolExecutor`` of
+    one process: a pool whose process dies fails every future it holds
+    (``BrokenProcessPool``), so with one pool per worker a death fails only the run that
+    worker held (:class:`WorkerDied`, its exit status said), and a new worker takes the
+    tasks left. A run interrupted in its worker (SIGTERM) stops the sweep as Ctrl-C does;
+    on Ctrl-C or SIGTERM of the sweep the workers are stopped (their runs lost: a resumed
+    sweep redoes them). Workers ignore Ctrl-C (the sweep stops them) and end at once,
+    quietly, when the sweep is gone (killed)."""
+    import concurrent.futures
 
-    def __init__(self, size: int, target: Callable[[dict[str, Any]], Any] | None = None) -> None:
-        import multiprocessing
-
-        self.ctx = multiprocessing.get_context("spawn")
-        self.size = size
-        self.target = target or run_one
-        """What a worker runs for each task (a module-level function: it is pickled)."""
-        self.workers: list[list[Any]] = []  # [process, connection, task or None]
-
-    def _start(self) -> list[Any]:
-        parent, child = self.ctx.Pipe()
-        proc = self.ctx.Process(target=_worker, args=(child, self.target), daemon=True)
-        proc.start()
-        child.close()
-        worker = [proc, parent, None]
-        self.workers.append(worker)
-        return worker
-
-    def run(
-        self, todo: list[dict[str, Any]], finish: Callable[[dict[str, Any], Any], None]
-    ) -> None:
-        from multiprocessing.connection import wait
-
-        queue = list(todo)
-        try:
-            for _ in range(self.size):
-                self._start()
-            while True:
-                for w in list(self.workers):
-                    if w[2] is None and queue:
-                        if not w[0].is_alive():  # ended after its last result
-                            self._drop(w)
-                            w = self._start()
-                        w[2] = queue.pop(0)
-                        w[1].send(w[2])
-                busy = [w for w in self.workers if w[2] is not None]
-                if not busy:
-                    return
-                ready = wait([w[1] for w in busy] + [w[0].sentinel for w in busy])
-                for w in busy:
-                    if w[1] in ready or w[0].sentinel in ready:
-                        self._collect(w, finish, bool(queue))
-        finally:
-            self._stop()
-
-    def _collect(self, w: list[Any], finish: Callable[[dict[str, Any], Any], None], more: bool):
-        proc, conn, task = w
-        try:
-            if conn.poll():
-                kind, value = conn.recv()
-                w[2] = None
-                if kind == "interrupted":
-                    raise KeyboardInterrupt
-                finish(task, value)
+    queue = list(todo)
+    workers: list[_Worker] = []
+    try:
+        while True:
+            for w in workers:
+                if w.future is None and queue:
+                    w.start(queue.pop(0))
+            while queue and len(workers) < size:
+                workers.append(_Worker(target))
+                workers[-1].start(queue.pop(0))
+            busy = {w.future: w for w in workers if w.future is not None}
+            if not busy:
                 return
-        except (EOFError, OSError):
-            pass
-        if proc.is_alive():  # woke up without a message: not done yet
-            return
-        w[2] = None
-        self._drop(w)
-        finish(task, WorkerDied(f"worker process {proc.pid} died ({_exit_reason(proc.exitcode)})"))
-        if more:
-            self._start()
+            done, _ = concurrent.futures.wait(busy, return_when="FIRST_COMPLETED")
+            for future in done:
+                w = busy[future]
+                task, result = w.task, w.result()
+                if isinstance(result, WorkerDied):
+                    w.close()
+                    workers.remove(w)
+                finish(task, result)
+    finally:
+        for w in workers:  # all at once: each run stops at its next safe point
+            w.stop()
+        for w in workers:
+            w.close()
 
-    def _drop(self, w: list[Any]) -> None:
-        w[0].join()
-        w[1].close()
-        self.workers.remove(w)
 
-    def _stop(self) -> None:
-        for _, conn, _ in self.workers:
-            with contextlib.suppress(OSError, ValueError):
-                conn.send(None)
-        for proc, conn, task in self.workers:
-            proc.join(timeout=2 if task is None else 0.1)
-            if proc.is_alive():
-                proc.terminate()
-                proc.join(timeout=5)
-            conn.close()
-        self.workers = []
+class _Worker:
+    """One worker process of :func:`run_pool`: a ``ProcessPoolExecutor`` of one, started
+    with ``spawn`` by a context that keeps the process (its pid and exit status for
+    :class:`WorkerDied`; stopped at once on an interrupt)."""
+
+    def __init__(self, target: Callable[[dict[str, Any]], Any]) -> None:
+        import concurrent.futures
+        import multiprocessing.context
+
+        class Spawn(multiprocessing.context.SpawnContext):
+            process: Any = None
+
+            def Process(self, *args: Any, **kwargs: Any) -> Any:
+                self.process = super().Process(*args, **kwargs)
+                return self.process
+
+        self.spawn = Spawn()
+        self.pool = concurrent.futures.ProcessPoolExecutor(
+            1, mp_context=self.spawn, initializer=_worker_start, initargs=(os.getpid(),)
+        )
+        self.target = target
+        self.task: dict[str, Any] | None = None
+        self.future: Any = None
+
+    def start(self, task: dict[str, Any]) -> None:
+        self.task = task
+        self.future = self.pool.submit(self.target, task)
+
+    def result(self) -> Any:
+        """The finished run's result or exception (:class:`WorkerDied` when the process
+        died); a run interrupted in the worker raises ``KeyboardInterrupt`` here."""
+        from concurrent.futures.process import BrokenProcessPool
+
+        future, self.future, self.task = self.future, None, None
+        try:
+            return future.result()
+        except BrokenProcessPool:
+            proc = self.spawn.process
+            deadline = time.monotonic() + 5
+            while proc.exitcode is None and time.monotonic() < deadline:
+                time.sleep(0.01)  # the pool's own thread reaps it
+            return WorkerDied(f"worker process {proc.pid} died ({_exit_reason(proc.exitcode)})")
+        except Exception as exc:
+            return exc
+
+    def stop(self) -> None:
+        """Stop the run the worker holds, if any (SIGTERM: ``train`` stops at its next
+        safe point, and the run ends as interrupted)."""
+        proc = self.spawn.process
+        if self.future is not None and proc is not None and proc.is_alive():
+            proc.terminate()
+
+    def close(self) -> None:
+        """End the worker, after its stopped run (SIGKILL if that takes over 5 s)."""
+        import concurrent.futures
+
+        if self.future is not None:
+            _, late = concurrent.futures.wait([self.future], timeout=5)
+            if late and self.spawn.process.is_alive():
+                self.spawn.process.kill()
+        self.pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _exit_reason(code: int | None) -> str:
@@ -1051,31 +1067,21 @@ def _exit_reason(code: int | None) -> str:
     return f"exit status {code}"
 
 
-def _worker(conn: Any, target: Callable[[dict[str, Any]], Any]) -> None:
-    """A pool worker: run ``target`` on each task received, send back ``(kind, value)``."""
-    while True:
-        try:
-            task = conn.recv()
-        except (EOFError, OSError, KeyboardInterrupt):
-            return
-        if task is None:
-            return
-        try:
-            message: tuple[str, Any] = ("ok", target(task))
-        except KeyboardInterrupt:
-            with contextlib.suppress(OSError):
-                conn.send(("interrupted", None))
-            return
-        except Exception as exc:
-            message = ("error", exc)
-        try:
-            conn.send(message)
-        except OSError:  # the sweep is gone (killed): nobody to tell
-            return
-        except Exception:  # the exception does not pickle: send its text
-            text = RuntimeError(f"{type(message[1]).__name__}: {message[1]}")
-            with contextlib.suppress(OSError):
-                conn.send(("error", text))
+def _worker_start(sweep: int) -> None:
+    """A worker's start (:func:`run_pool`): Ctrl-C is the sweep's to handle (it stops its
+    workers), and a watch that ends the worker, quietly, when the sweep ``sweep`` (a pid)
+    is gone: killed, its worker would otherwise wait for tasks for ever."""
+    import signal
+    import threading
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    threading.Thread(target=_watch_sweep, args=(sweep,), daemon=True).start()
+
+
+def _watch_sweep(sweep: int) -> None:
+    while os.getppid() == sweep:
+        time.sleep(0.5)
+    os._exit(0)
 
 
 def _run_ray(

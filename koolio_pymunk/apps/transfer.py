@@ -8,7 +8,7 @@ real robot. For every seed, and for two tables (``ideal``: trained in the ideal 
 1. **train** the table in simulation (``--episodes``), or load it (``--qtable``,
    ``--dr-qtable``);
 2. **evaluate** its greedy policy in the ideal world and in the realistic world
-   (:func:`~koolio_pymunk.learning.training.evaluate`, the figures of ``koolio-pm eval``);
+   (:func:`~koolio_pymunk.learning.evaluation.evaluate`, the figures of ``koolio-pm eval``);
 3. **hand it to the robot and keep learning there**: the table is exported
    (:func:`~koolio_pymunk.apps.export.policy_document`), loaded with ``robot_runtime.Policy``
    and driven by ``robot_runtime.RobotLearner`` from raw readings, exactly as on the
@@ -130,24 +130,13 @@ class TransferConfig:
     schedule's value at the table's episode count)."""
 
     def validate(self) -> None:
-        """Check the numbers; :class:`KoolioError` (one line) naming the flag."""
-        checks = (
-            (self.episodes >= 0, "--episodes", "must be >= 0"),
-            (self.robot_episodes >= 0, "--robot-episodes", "must be >= 0"),
-            (self.eval_episodes >= 1, "--eval-episodes", "must be >= 1"),
-            (self.eval_every >= 1, "--eval-every", "must be >= 1"),
-            (0.0 <= self.target <= 1.0, "--target", "must be in [0, 1]"),
-            (bool(self.seeds), "--seed", "needs at least one seed"),
-            (len(set(self.seeds)) == len(self.seeds), "--seed", "repeated seed"),
-        )
-        for ok, flag, problem in checks:
-            if not ok:
-                raise KoolioError(f"{flag}: {problem}")
-        alpha, epsilon = self.robot_alpha, self.robot_epsilon
-        if alpha is not None and not 0.0 < alpha <= 1.0:  # learner.alpha's range
-            raise KoolioError(f"--robot-alpha: must be in (0, 1], got {alpha:g}")
-        if epsilon is not None and not 0.0 <= epsilon <= 1.0:
-            raise KoolioError(f"--robot-epsilon: must be in [0, 1], got {epsilon:g}")
+        """Check what the flags' types cannot (each number's range is checked once, where
+        argparse reads the flag: :mod:`koolio_pymunk.apps.flags`); :class:`KoolioError`
+        (one line) naming the flag."""
+        if not self.seeds:
+            raise KoolioError("--seed: needs at least one seed")
+        if len(set(self.seeds)) != len(self.seeds):
+            raise KoolioError("--seed: repeated seed")
         if self.goal == "random":
             raise KoolioError("--goal: random: the experiment delivers to one door (name it)")
 
@@ -491,7 +480,7 @@ class TransferResult:
             "format": FORMAT,
             "version": VERSION,
             "settings": {f.name: _plain(getattr(self.cfg, f.name)) for f in fields(self.cfg)},
-            "summary": summary(self.runs, self.cfg),
+            "summary": summary(self.runs),
             "runs": self.runs,
             "timing": {"seconds": self.seconds, "runs": self.timing},
         }
@@ -609,7 +598,7 @@ def write_json(result: TransferResult, path: Path) -> None:
     atomic_write_text(path, json.dumps(result.as_dict(), indent=1) + "\n")
 
 
-def summary(runs: list[dict[str, Any]], cfg: TransferConfig) -> dict[str, Any]:
+def summary(runs: list[dict[str, Any]]) -> dict[str, Any]:
     """Per table, over seeds: greedy goal rates, the ideal-to-real drop, recoveries."""
     out: dict[str, Any] = {}
     for source in SOURCES:

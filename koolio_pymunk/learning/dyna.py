@@ -49,8 +49,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..store.config import LearnerConfig
-from .dyna_model import SECTION as SECTION
-from .dyna_model import Model as Model
+from .dyna_model import SECTION, Model
 from .qlearning import QLearner
 from .qtable import QTable
 

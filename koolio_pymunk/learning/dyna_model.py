@@ -31,57 +31,11 @@ from ..store.keyword import KeywordLayout
 SECTION = "dyna_model"
 
 
-def robot_layout(layout: KeywordLayout) -> rt.Layout:
-    """The robot runtime's :class:`~koolio_pymunk.robot_runtime.Layout` of ``layout``."""
-    return rt.Layout(layout.fields, layout.n_actions)
-
-
-class Model:
-    """Every (state, action) pair seen, with the counted outcomes of each (module doc)."""
-
-    def __init__(self) -> None:
-        self.pairs: list[tuple[int, int]] = []
-        """``(state, action)`` in first-seen order."""
-        self.outcomes: list[list[list]] = []
-        """Per pair: ``[next_state, reward, terminal, count]`` in first-seen order."""
-        self.totals: list[int] = []
-        """Per pair: the sum of its counts."""
-        self._pair: dict[tuple[int, int], int] = {}
-        self._outcome: list[dict[tuple[int, float, bool], list]] = []
-
-    def __len__(self) -> int:
-        return len(self.pairs)
-
-    def record(self, state: int, action: int, reward: float, nxt: int, terminal: bool) -> None:
-        """Count one real transition."""
-        i = self._pair.get((state, action))
-        if i is None:
-            i = len(self.pairs)
-            self._pair[(state, action)] = i
-            self.pairs.append((state, action))
-            self.outcomes.append([])
-            self.totals.append(0)
-            self._outcome.append({})
-        key = (nxt, reward, terminal)
-        out = self._outcome[i].get(key)
-        if out is None:
-            out = [nxt, reward, terminal, 0]
-            self._outcome[i][key] = out
-            self.outcomes[i].append(out)
-        out[3] += 1
-        self.totals[i] += 1
-
-    def sample(self, u1: float, u2: float) -> tuple[int, int, float, int, bool]:
-        """``(state, action, reward, next_state, terminal)`` for draws ``u1, u2`` in [0, 1)."""
-        i = int(u1 * len(self.pairs))
-        x = u2 * self.totals[i]
-        seen = 0
-        for out in self.outcomes[i]:
-            seen += out[3]
-            if x < seen:
-                break
-        state, action = self.pairs[i]
-        return state, action, out[1], out[0], out[2]
+class Model(rt.Model):
+    """Every (state, action) pair seen, with the counted outcomes of each (module doc):
+    the robot runtime's :class:`~koolio_pymunk.robot_runtime.Model` (one recording and
+    one :meth:`~koolio_pymunk.robot_runtime.Model.sample` for the simulator and the
+    robot), read and written as the Q-table file's section."""
 
     def __bytes__(self) -> bytes:
         n = len(self.pairs)
@@ -124,32 +78,25 @@ class Model:
             raise bad
         _check_entries(arrays, source, layout)
         k = 0
-        for i, (state, action, size) in enumerate(zip(states, actions, sizes)):
-            model._pair[(state, action)] = i
-            model.pairs.append((state, action))
+        for state, action, size in zip(states, actions, sizes):
             outs = [
                 [nexts[j], rewards[j], bool(terminals[j]), counts[j]] for j in range(k, k + size)
             ]
-            model.outcomes.append(outs)
-            model.totals.append(sum(counts[k : k + size]))
-            model._outcome.append({(o[0], o[1], o[2]): o for o in outs})
+            if (state, action) in model or len({(o[0], o[1], o[2]) for o in outs}) != size:
+                raise bad  # a pair, or an outcome of a pair, twice
+            model.add(state, action, outs)
             k += size
-        if len(model._pair) != n or any(
-            len(d) != len(o) for d, o in zip(model._outcome, model.outcomes)
-        ):
-            raise bad
         return model
 
 
 def _check_entries(arrays: list[list], source: str, layout: KeywordLayout | None) -> None:
     """The checks of the module doc on the section's arrays, pair by pair."""
     states, actions, sizes, nexts, rewards, terminals, counts = arrays
-    lay = robot_layout(layout) if layout is not None else None
     k = 0
     for i, (state, action, size) in enumerate(zip(states, actions, sizes)):
         problem = None
-        if lay is not None:
-            problem = rt.state_problem(state, lay) or rt.action_problem(action, lay)
+        if layout is not None:
+            problem = rt.state_problem(state, layout) or rt.action_problem(action, layout)
         for j in range(k, k + size):
             if problem:
                 break
@@ -157,8 +104,8 @@ def _check_entries(arrays: list[list], source: str, layout: KeywordLayout | None
                 problem = f"terminal {terminals[j]} is not 0 or 1"
             else:
                 problem = rt.outcome_problem(rewards[j], bool(terminals[j]), counts[j])
-            if problem is None and lay is not None:
-                problem = rt.state_problem(nexts[j], lay)
+            if problem is None and layout is not None:
+                problem = rt.state_problem(nexts[j], layout)
         if problem is None and sum(counts[k : k + size]) > rt.MAX_COUNT:
             problem = "its counts sum to more than 2**53"
         if problem:

@@ -1,11 +1,12 @@
 """The episode loop: one robot, one episode, one step at a time (paper §5.4.6 and §5.4.8).
 
-Every place that runs episodes of one robot runs them here: ``koolio-pm train`` and
-``eval`` (:mod:`koolio_pymunk.learning.training`), the window's learning and watching
-(:mod:`koolio_pymunk.apps.viewer.session`) and the robot runtime's episodes of
-``koolio-pm transfer`` (:mod:`koolio_pymunk.apps.transfer`). Many robots on one table
-(:mod:`koolio_pymunk.learning.fleet`) keep their own compiled inner loop but take the
-seeds, the episode's row and the bookkeeping from here.
+This is the reference of every loop that runs episodes: :class:`Episodes` (one robot;
+the window's learning and watching, :mod:`koolio_pymunk.apps.viewer.session`, and the
+robot runtime's episodes of ``koolio-pm transfer``) and :class:`Robots` (N robots in
+tick order on one table). ``koolio-pm train`` and ``eval``
+(:mod:`koolio_pymunk.learning.training`, :mod:`koolio_pymunk.learning.evaluation`) run
+the same episodes on the compiled step engine (:mod:`koolio_pymunk.learning.engine`),
+bit for bit, and take the seeds and the episode's row from here.
 
 **One step** (:meth:`Episodes.step`), in the paper's order:
 

@@ -131,7 +131,7 @@ def td_target(
     step (goal, end of world), and ``q_init`` for a next state never visited.
 
     This and :func:`td_step` are the reference of the update: every learner here uses
-    them; the compiled many-robot loop (:mod:`koolio_pymunk.learning.fleet_kernel`) and
+    them; the step engine's kernels (:mod:`koolio_pymunk.learning.table_kernel`) and
     ``robot_runtime.py`` repeat them and are held to them bit for bit by the tests.
 
     >>> td_target(-1.0, [0.0, 4.0], -30.0, 0.9, terminal=False)

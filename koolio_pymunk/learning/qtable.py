@@ -155,7 +155,7 @@ class QTable:
     def to_bytes(self) -> bytes:
         """The ``.qtable`` file's bytes (:meth:`from_bytes` reads them back exactly)."""
         header = dict(self.meta)
-        header.update(format=FORMAT_VERSION, layout=self.layout.to_json(), q_init=self.q_init)
+        header.update(format=FORMAT_VERSION, layout=self.layout.header_json(), q_init=self.q_init)
         blobs = [(name, bytes(self.sections[name])) for name in sorted(self.sections)]
         if blobs:
             header["sections"] = [[name, len(blob)] for name, blob in blobs]
@@ -366,12 +366,13 @@ def backup_path(path: Path) -> Path:
 class QTableStore:
     """A Q-table file, its backup (``<file>.bak``) and its journal (``<file>.journal``).
 
-    :meth:`open` locks the table (one writer at a time), reads it (creating both files
-    empty when missing); :meth:`save` writes the whole table (a *snapshot*), :meth:`append`
+    :meth:`load` locks the table (one writer at a time) and reads it, or makes a new
+    empty one without writing (:attr:`fresh`); :meth:`create` writes a new table's files;
+    :meth:`save` writes the whole table (a *snapshot*), :meth:`append`
     adds the rows one episode changed to the journal
     (:mod:`~koolio_pymunk.learning.table_journal`); :meth:`close` releases the lock.
-    ``open`` is :meth:`load` then, for a new table, :meth:`create`: a caller that must
-    check something before any file is written (the training log) calls them itself.
+    A caller checks what must be checked before any file is written (the training log)
+    between the two.
 
     **The two ways of keeping a table** (``fsync``; ``koolio-pm train --fsync``,
     docs/robustness.md). Every snapshot is written, fsynced (its folder too) and put in
@@ -407,21 +408,6 @@ class QTableStore:
         """True from :meth:`create` (a new table, or one started from another with
         ``--init-qtable``) to :meth:`close`: the run holding the lock made it, so its log
         must be new too."""
-
-    def open(
-        self,
-        layout: KeywordLayout,
-        sensors: dict[str, Any],
-        q_init: float,
-        arena: dict[str, str] | None = None,
-        record: dict[str, str] | None = None,
-    ) -> QTable:
-        """Lock, then load the table (checking it was made for ``layout`` and ``sensors``;
-        a table learned in another ``arena`` gives a warning), or create it."""
-        table = self.load(layout, sensors, q_init, arena, record)
-        if self.fresh:
-            self.create(table)
-        return table
 
     @property
     def locked(self) -> bool:

@@ -11,9 +11,10 @@ original (no fastmath), so it gives the same bits; there is still one Python sou
 each computation. The original stays as it was for Python callers and the rest of the
 code.
 
-numba's on-disk cache keys a compiled function on its own source file only: after a
-change to a function that is inlined elsewhere, touch the files that inline it (or clear
-``koolio_pymunk/**/__pycache__/*.nb[ic]``), as after any change to a kernel's callee.
+numba's on-disk cache keys a compiled function on its own source file only, so a change
+to a function inlined elsewhere would leave its callers' cached machine code as it was:
+:mod:`koolio_pymunk.store.kernel_cache` clears the package's cached kernels whenever a
+source that uses numba changed (every kernel module calls it at import).
 """
 
 from __future__ import annotations

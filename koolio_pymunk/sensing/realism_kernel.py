@@ -6,7 +6,8 @@ what the reference does (echo of every sub-arc ray, crosstalk, the four-part bea
 the minimum range, misread plates and missed detections), so both give the same
 readings bit for bit; ``tests/sensing/test_realism.py`` and ``tools/agreement.py`` check it.
 :func:`sense_realism` is the learner's hot path in a realistic world: the sensing kernel
-(:func:`raycast.sense_one`), the models and the read-out (:func:`readout.readout`) in
+(:func:`~.ray_kernel.sense_one`), the models and the read-out
+(:func:`~.encoding_kernel.readout`) in
 one call, finding the other plates in view only for a camera whose misread draw fired
 (the reference finds them for every camera; only those are used).
 The parameter layout (``params``, ``flags``) is
@@ -238,6 +239,12 @@ def apply_realism(
     (``crossed``), the cameras' missed detections (``missed[c] = [goal, marker]``) and
     misread plates; the sonar entries of ``raw`` are only rewritten when a sonar model
     is on, the camera entries when a camera model is on (see the reference).
+
+    Why it ships though only the tests call it: it is the models alone, compiled, the
+    same model functions that :func:`sense_realism` runs inline between the reading and
+    the read-out, so ``tests/sensing/test_realism.py`` can hold them to the reference
+    :func:`~koolio_pymunk.sensing.realism.apply_reference` reading by reading, on the
+    same draws.
     """
     n = rays.shape[0]
     _sonar(raw, rays, ray_cos, draws, 0, params, flags, neighbours, echo, crossed)
@@ -251,10 +258,10 @@ def sense_realism(x: float, y: float, h: float, geometry: tuple, goal: np.ndarra
                   codes: np.ndarray) -> tuple[int, bool, bool]:  # fmt: skip
     """One reading in a realistic world: ``(state_key, bump, goal_close)``.
 
-    :func:`raycast.sense_one` (without other plates), then, per camera whose misread
+    :func:`~.ray_kernel.sense_one` (without other plates), then, per camera whose misread
     draw ``u[4 n + 3 c] < misread``, the nearest of ``plates`` in its arc and in sight
     (``decoy``; far for the others), :func:`apply_realism`'s models with the uniforms
-    ``u``, and :func:`readout.readout` with the noise draws ``noise``. With
+    ``u``, and :func:`~.encoding_kernel.readout` with the noise draws ``noise``. With
     ``noise_from_u`` (the uniform noise model) ``u`` holds both, from one generator call
     (or as many scalar draws: the same values): first the readings' uniforms, turned into
     ``noise`` as ``rng.uniform(-1, 1)`` turns them (``-1 + 2 u``), then the realism

@@ -7,7 +7,7 @@ it in its first line, so its signature reads in one line. Plain tuples (numba ty
 field by field, and a call costs what the separate arguments cost; a named tuple or a
 structref costs a measurable fraction of a microsecond more per call). Each group's fields,
 in order, are the names below; :class:`~koolio_pymunk.sensing.suite.KernelInputs` builds
-them once per sensor suite, the fleet once per world.
+them once per sensor suite (:class:`~.reading_kernel.ReadingArrays` stacks N robots').
 
 * **geometry** (:data:`GEOMETRY`): what a reading's rays and cameras need of the sensor
   suite and the walls;

@@ -461,8 +461,9 @@ class KernelInputs:
     """Arrays and buffers of one :class:`SensorSuite` for the compiled kernels.
 
     ``sense(x, y, h, raw, rays, eow_k, ray_cos, decoy)`` is :func:`ray_kernel.sense_one`;
-    ``sense_readout(pose, rng)`` adds the noise draws, the realism models
-    (:func:`realism_kernel.apply_realism`, when one is on) and :func:`encoding_kernel.readout`.
+    ``sense_readout(pose, rng)`` adds the noise draws and :func:`encoding_kernel.readout`,
+    or, when a realism model is on, is :func:`realism_kernel.sense_realism` (the
+    reading, the models and the read-out in one call).
     """
 
     def __init__(self, s: SensorSuite) -> None:

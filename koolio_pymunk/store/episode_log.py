@@ -76,17 +76,18 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import functools
 import io
 import math
 import os
 import re
-import stat
 import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ..robot_runtime import LOG_FIELDS, open_append
 from .errors import FileError, KoolioError, located
 from .files import (
     atomic_write,
@@ -102,7 +103,8 @@ from .locks import FileLock, check_lock_file, lock_path
 if TYPE_CHECKING:
     from .config import EpsilonSchedule
 
-LOG_FIELDS = ("episode", "reward", "steps", "bumps", "outcome", "rescued", "epsilon", "goal")
+#: The log's columns are :data:`~koolio_pymunk.robot_runtime.LOG_FIELDS`: the robot writes
+#: the same log.
 HEADER = ",".join(LOG_FIELDS)
 #: Largest log read back (a million episodes is about 40 MiB).
 MAX_LOG_BYTES = 1 << 30
@@ -113,6 +115,9 @@ MAX_LOG_LINE = 64 * 1024
 INT_FIELDS = ("episode", "steps", "bumps")
 FLOAT_FIELDS = ("reward", "epsilon")
 
+#: ``open()``'s opener of the log: appending, never waiting (a FIFO with no reader is an
+#: error, not a hang), a regular file only (the robot's opener, with this package's error).
+_APPEND = functools.partial(open_append, refuse=not_regular)
 _INT = re.compile(r"[0-9]{1,18}")
 _FLOAT = re.compile(
     r"[-+]?(?:[0-9]{1,400}(?:\.[0-9]{0,400})?|\.[0-9]{1,400})(?:[eE][-+]?[0-9]{1,4})?"
@@ -483,14 +488,14 @@ class LogWriter:
         if self._fh is None:
             make_parent(self.path)
             self._fh = open(  # noqa: SIM115
-                self.path, "a", newline="", encoding="utf-8", opener=_open_append
+                self.path, "a", newline="", encoding="utf-8", opener=_APPEND
             )
             if os.fstat(self._fh.fileno()).st_size == 0:  # new or empty: the header first
                 self._fh.write(header_line(self.extra_fields) + "\n")
         return self._fh
 
     def write(self, result: Any) -> None:
-        """Append ``result.row()`` (an :class:`~koolio_pymunk.learning.training.EpisodeResult`)."""
+        """Append ``result.row()`` (an :class:`~koolio_pymunk.learning.episodes.EpisodeResult`)."""
         if self.path is None:
             return
         for message in self._later:
@@ -513,17 +518,6 @@ class LogWriter:
         if self._lock is not None:
             self._lock.release()
             self._lock = None
-
-
-def _open_append(path: str, flags: int) -> int:
-    """``open()``'s opener of the log: appending, never waiting (a FIFO with no reader is
-    an error, not a hang), a regular file only."""
-    fd = os.open(path, flags | getattr(os, "O_NONBLOCK", 0), 0o666)
-    mode = os.fstat(fd).st_mode
-    if not stat.S_ISREG(mode):
-        os.close(fd)
-        raise not_regular(path, mode)
-    return fd
 
 
 def removed_path(log: Path) -> Path:

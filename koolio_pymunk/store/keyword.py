@@ -2,9 +2,12 @@
 
 A state is a tuple of sensor codes (goal cameras, end-of-world cameras, sonar groups,
 then the compass if it is in the state); the keyword shifts each code into its own bit
-field and the action into the low bits. :class:`KeywordLayout` computes the shifts and
-the sizes the paper discusses (§5.4.8). The encoded levels of each sensor kind are named
-here too (:data:`SONAR_LEVELS`, :data:`CAMERA_LEVELS`, :data:`COMPASS_LEVELS`).
+field and the action into the low bits. The arithmetic is the robot's:
+:class:`KeywordLayout` is the runtime's :class:`~koolio_pymunk.robot_runtime.Layout`
+(bits, shifts, keyword, decode, the policy file's ``layout``), compared by its fields,
+with the sizes the paper discusses (§5.4.8) and the Q-table header's form. The encoded
+levels of each sensor kind are named here too (:data:`SONAR_LEVELS`,
+:data:`CAMERA_LEVELS`, :data:`COMPASS_LEVELS`).
 
 >>> lay = KeywordLayout((("GoalCam0", 3), ("Sonar0", 4)))
 >>> lay.shifts, lay.action_bits, lay.total_bits
@@ -15,10 +18,9 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import Any
 
-from ..robot_runtime import field_bits
+from ..robot_runtime import Layout
 
 N_ACTIONS = 5
 
@@ -34,77 +36,58 @@ MAX_LEVELS = 1 << 16
 MAX_ACTIONS = 64
 
 
-@dataclass(frozen=True)
-class KeywordLayout:
-    """Bit layout of the keyword: state fields (name, levels), most significant first."""
+class KeywordLayout(Layout):
+    """Bit layout of the keyword: state fields (name, levels), most significant first.
 
-    fields: tuple[tuple[str, int], ...]
-    n_actions: int = N_ACTIONS
+    The robot runtime's :class:`~koolio_pymunk.robot_runtime.Layout`, so a table and the
+    policy exported from it encode alike by construction; equal (and hashed) by its
+    fields and action count. Not to be changed once made.
 
-    @property
-    def bits(self) -> tuple[int, ...]:
-        """Bits of each field: ``max(1, ceil(log2(levels)))``, in integers (exact)."""
-        return tuple(field_bits(levels) for _, levels in self.fields)
+    >>> lay = KeywordLayout((("A", 3), ("B", 4)))
+    >>> lay.fields, lay.bits, lay.keyword((2, 1), 3), lay.decode(75)
+    ((('A', 3), ('B', 4)), (2, 2), 75, ((2, 1), 3))
+    >>> lay == KeywordLayout([("A", 3), ("B", 4)], 5), lay == KeywordLayout((("A", 3),))
+    (True, False)
+    """
 
-    @property
-    def action_bits(self) -> int:
-        return field_bits(self.n_actions)
+    def __init__(self, fields: Sequence[tuple[str, int]], n_actions: int = N_ACTIONS) -> None:
+        super().__init__(fields, n_actions)
+        self.fields: tuple[tuple[str, int], ...] = tuple(zip(self.names, self.levels))
+        """``(name, levels)`` of each state field, most significant first."""
 
-    @property
-    def shifts(self) -> tuple[int, ...]:
-        """Shift of each field within the keyword (Table 12's ``<<`` numbers)."""
-        out, pos = [], self.action_bits
-        for b in reversed(self.bits):
-            out.append(pos)
-            pos += b
-        return tuple(reversed(out))
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, KeywordLayout):
+            return NotImplemented
+        return (self.fields, self.n_actions) == (other.fields, other.n_actions)
 
-    @property
-    def total_bits(self) -> int:
-        return sum(self.bits) + self.action_bits
+    def __hash__(self) -> int:
+        return hash((self.fields, self.n_actions))
+
+    def __repr__(self) -> str:
+        return f"KeywordLayout({self.fields!r}, n_actions={self.n_actions})"
 
     @property
     def n_states(self) -> int:
-        return math.prod(levels for _, levels in self.fields)
+        """States the fields can encode (the rows of a dense table)."""
+        return math.prod(self.levels)
 
     @property
     def n_entries(self) -> int:
+        """Entries of a dense table: states times actions."""
         return self.n_states * self.n_actions
 
     def dense_bytes(self, value_bytes: int = 8) -> int:
         """Bytes of a dense table of doubles (paper: 113.9 MiB)."""
         return self.n_entries * value_bytes
 
-    def state_key(self, codes: Sequence[int]) -> int:
-        key = 0
-        for code, b in zip(codes, self.bits):
-            key = (key << b) | code
-        return key
-
-    def keyword(self, codes: Sequence[int], action: int) -> int:
-        """The Table 12 keyword of ``codes`` and ``action``."""
-        return (self.state_key(codes) << self.action_bits) | action
-
-    def decode(self, keyword: int) -> tuple[tuple[int, ...], int]:
-        """``(codes, action)`` of a keyword."""
-        action = keyword & ((1 << self.action_bits) - 1)
-        key = keyword >> self.action_bits
-        codes = []
-        for b in reversed(self.bits):
-            codes.append(key & ((1 << b) - 1))
-            key >>= b
-        return tuple(reversed(codes)), action
-
-    def to_json(self) -> dict[str, Any]:
+    def header_json(self) -> dict[str, Any]:
+        """The Q-table header's ``layout`` (:mod:`koolio_pymunk.learning.qtable`); the
+        policy file's is :meth:`to_json`."""
         return {
             "fields": [[n, lv] for n, lv in self.fields],
             "action_bits": self.action_bits,
             "n_actions": self.n_actions,
         }
-
-    @classmethod
-    def from_json(cls, data: dict[str, Any]) -> KeywordLayout:
-        return cls(tuple((str(n), int(lv)) for n, lv in data["fields"]), int(data["n_actions"]))
 
 
 #: Codes of the sonar intervals (Table 6) and camera intervals (Table 7).

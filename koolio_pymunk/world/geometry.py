@@ -190,24 +190,6 @@ def _edges_meet_badly(edges: list[tuple[Point, Point]], i: int, j: int, n: int) 
     return segments_intersect(a, b, c, d)
 
 
-def is_simple_polygon(poly: Polygon) -> bool:
-    """At least 3 points, non-zero area and no self-intersection."""
-    return (
-        len(poly) >= 3 and abs(polygon_area(poly)) > EPS and polygon_self_intersection(poly) is None
-    )
-
-
-def disc_polygon(center: Point, radius: float, n: int = 24) -> tuple[Point, ...]:
-    """A regular ``n``-gon inscribed in the circle (counter-clockwise, first point east)."""
-    if n < 3:
-        raise ValueError("a disc polygon needs at least 3 points")
-    cx, cy = center
-    return tuple(
-        (cx + radius * math.cos(2 * math.pi * k / n), cy + radius * math.sin(2 * math.pi * k / n))
-        for k in range(n)
-    )
-
-
 def polygons_intersect(p: Polygon, q: Polygon) -> tuple[int, int] | None:
     """The first pair of edge indices ``(i, j)`` (edge i of p, edge j of q) that meet."""
     np_, nq = len(p), len(q)

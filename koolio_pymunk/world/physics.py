@@ -60,8 +60,8 @@ own queries see them where they are.
 Example::
 
     >>> from koolio_pymunk.world.physics import World, Action
-    >>> w = World.from_segments([((0, 0), (100, 0)), ((100, 0), (100, 100)),
-    ...                          ((100, 100), (0, 100)), ((0, 100), (0, 0))], radius=10)
+    >>> w = World([((0, 0), (100, 0)), ((100, 0), (100, 100)),
+    ...            ((100, 100), (0, 100)), ((0, 100), (0, 0))], radius=10)
     >>> w.place(0, (50, 50), 0.0)
     >>> w.act([Action.FORWARD], distance=12, arc=0.1)
     >>> w.x[0], w.y[0]
@@ -273,19 +273,11 @@ class World:
         for _ in range(n_robots):
             self._add_robot()
         self.heading = [0.0] * n_robots
-        self.awake = list(range(n_robots))
-        """Every robot (nothing sleeps: the space is never stepped); kept for callers."""
 
     @classmethod
     def from_arena(cls, arena: Arena, radius: float, n_robots: int = 1) -> World:
         """A world holding ``arena``'s walls and obstacles (``rotate_deg`` applied)."""
         return cls(arena.to_world().segments(), radius, n_robots)
-
-    @classmethod
-    def from_segments(
-        cls, segments: Sequence[tuple[Point, Point]], radius: float, n_robots: int = 1
-    ) -> World:
-        return cls(segments, radius, n_robots)
 
     def _add_walls(self, k: int) -> tuple[list[pymunk.Segment], list[pymunk.Circle]]:
         """Add robot ``k``'s copy of the walls (shifted by its offset along x): thin
@@ -361,16 +353,10 @@ class World:
         self._cp.set_position(self.bodies[i], float(x), float(y))
 
     # -- actions --------------------------------------------------------------------
-    def act(
-        self,
-        actions: Sequence[int],
-        distance: float,
-        arc: float,
-        near_wall: Callable[[list[int], float], bool] | None = None,
-    ) -> None:
+    def act(self, actions: Sequence[int], distance: float, arc: float) -> None:
         """Perform one action per robot: rotations by ``arc`` radians, moves by ``distance``
         along the heading (Forward) or against it (Reverse), each a swept move
-        (:func:`sweep`). ``near_wall`` is accepted for old callers and not used."""
+        (:func:`sweep`)."""
         heading = self.heading
         for i, action in enumerate(actions):
             if action == _ROTATE_LEFT:

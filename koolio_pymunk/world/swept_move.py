@@ -2,7 +2,7 @@
 
 :meth:`koolio_pymunk.world.physics.World.shift` moves a robot as a swept circle, asking
 pymunk (Chipmunk) for each contact; :func:`sweep` here is the same move in one numba
-call, for compiled loops that move robots themselves (an episode or a fleet step):
+call, for compiled loops that move robots themselves (the step engine's):
 
 * the same steps in the same floating-point operations (contact, push-out by
   :data:`~koolio_pymunk.world.physics.SKIN`, the rest projected on the wall's tangent,
@@ -30,8 +30,8 @@ Example::
 
     >>> from koolio_pymunk.world.physics import World
     >>> from koolio_pymunk.world.segment_query import wall_array
-    >>> w = World.from_segments([((0, 0), (100, 0)), ((100, 0), (100, 100)),
-    ...                          ((100, 100), (0, 100)), ((0, 100), (0, 0))], radius=10)
+    >>> w = World([((0, 0), (100, 0)), ((100, 0), (100, 100)),
+    ...            ((100, 100), (0, 100)), ((0, 100), (0, 0))], radius=10)
     >>> walls = wall_array(w)
     >>> move(walls, 50.0, 50.0, 0.0, 12.0, 10.0)
     (62.0, 50.0)

@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 import pytest
-from inputs import expect_error, table_file
+from inputs import expect_error, open_table, table_file
 
 from koolio_pymunk import robot_runtime as rt
 from koolio_pymunk.apps import cli
@@ -88,7 +88,7 @@ def test_runtime_encoding_matches_simulator(tmp_path):
     """Raw readings of 300 random steps encode to the simulator's codes (also None=unseen)."""
     cfg = load_config(overrides={"sensors": {"compass": {"in_state": True}}})
     env = KoolioEnv(config=cfg, max_steps=300)
-    table = QTableStore(tmp_path / "c.qtable").open(env.layout, sensor_signature(cfg), 0.0)
+    table = open_table(QTableStore(tmp_path / "c.qtable"), env.layout, sensor_signature(cfg), 0.0)
     write_policy(policy_document(table, cfg), tmp_path / "c.json")
     policy = rt.Policy.load(str(tmp_path / "c.json"))
     assert len(policy.layout.levels) == 13

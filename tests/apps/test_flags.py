@@ -58,6 +58,31 @@ def test_every_number_flag_is_one_line(tmp_path, monkeypatch, capsys, argv, word
     assert line.endswith(f"(see koolio-pm {argv[0]} --help)")
 
 
+#: A range's refusal written in a command: ``"--robots: must be``, ``f"{flag}: must be``,
+#: ``("--episodes", "must be``.
+WORDS_OF_A_RANGE = (
+    r"[\"'](?:--[a-z][a-z-]*|\{flag\}): must be|[\"']--[a-z][a-z-]*[\"'], [\"']must be"
+)
+
+
+def test_a_flag_s_range_is_checked_once_by_its_type():
+    """No command checks a number flag's range again after argparse (``_positive(args.
+    episodes)``, ``--robots: must be in ...`` were second checks that a run made after the
+    flag's type had): the words ``--FLAG: must be`` are said by :mod:`~koolio_pymunk.apps.
+    flags` alone. (``view --screenshot-every K DIR`` reads K itself: two words, one type.)"""
+    import re
+    from pathlib import Path
+
+    apps = Path(cli.__file__).parent
+    again = [
+        f"{path.relative_to(apps)}: {m.group(0)}"
+        for path in sorted(apps.rglob("*.py"))
+        if path.name != "flags.py"
+        for m in re.finditer(WORDS_OF_A_RANGE, path.read_text())
+    ]
+    assert again == [], again
+
+
 def test_main_returns_the_status_of_argparse(capsys):
     assert cli.main(["train", "--seed", "-1"]) == 2
     assert cli.main(["--version"]) == 0

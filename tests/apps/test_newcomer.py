@@ -18,6 +18,8 @@ import pytest
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
 
+from inputs import open_table
+
 from koolio_pymunk.apps import cli
 from koolio_pymunk.learning.qtable import QTableStore, load_qtable, sensor_signature
 from koolio_pymunk.store.config import PROFILE_DIR, load_config
@@ -255,7 +257,7 @@ def test_eval_of_a_policy_file_does_not_guess_its_goal_and_world(here, capsys) -
 def test_eval_warns_on_an_empty_table(here, capsys) -> None:
     env = KoolioEnv("room", config="tiny.yaml")
     with QTableStore("empty.qtable") as store:
-        store.open(env.layout, sensor_signature(env.config), -30.0, arena_record(env.arena))
+        open_table(store, env.layout, sensor_signature(env.config), -30.0, arena_record(env.arena))
     code, _, err = run(capsys, "eval", *ROOM, "--qtable", "empty.qtable", "--episodes", "1")
     assert code == 0
     assert "warning: empty.qtable: holds 0 episodes (an empty table" in err

@@ -10,9 +10,11 @@ from pathlib import Path
 import pytest
 
 from koolio_pymunk.apps import cli
-from koolio_pymunk.apps.sweep import TIMING_COLUMNS, load_spec, parse_spec, plan, run_sweep
+from koolio_pymunk.apps.sweep import load_spec, parse_spec, plan, run_sweep
 from koolio_pymunk.store.errors import ConfigError
 
+#: Result columns that depend on the machine's speed (left out of comparisons).
+TIMING_COLUMNS = ("competence_seconds", "train_seconds")
 SPEC = """
 name: tiny
 episodes: 3
@@ -97,6 +99,48 @@ def test_resume_skips_finished_runs_and_matches(spec_file, tmp_path, capsys):
     assert "4 runs (3 already done, 1 to run)" in said
     assert (outcome.ran, outcome.skipped) == (1, 3)
     assert _rows(out) == first
+
+
+def test_a_run_s_checkpoints_are_train_eval_every_s_checks(tmp_path):
+    """A run checks its table as ``koolio-pm train --eval-every`` does, with the run's
+    seed: the same table bytes and the same check figures (a sweep once evaluated with
+    seed 1,000,000 + s, so one run had other checkpoints in a sweep than in ``train``);
+    a last stretch shorter than ``eval_every`` ends with that evaluation of the final
+    table."""
+    from koolio_pymunk.learning.evaluation import evaluate
+    from koolio_pymunk.learning.qtable import load_qtable
+    from koolio_pymunk.task.env import KoolioEnv
+
+    text = "name: one\nepisodes: 5\nseeds: [3]\narena: room\n"
+    text += "base: {episode: {max_steps: 40}}\neval_every: 2\neval_episodes: 4\n"
+    run_sweep(load_spec_text(tmp_path, text), tmp_path / "out", workers=1, plot=False, report=None)
+    (run,) = (tmp_path / "out").glob("runs/*/seed3")
+    swept = list(csv.DictReader((run / "evals.csv").open()))
+    (tmp_path / "cfg.yaml").write_text("episode: {max_steps: 40}\n")
+    table = tmp_path / "t.qtable"
+    argv = ["train", "--arena", "room", "--config", str(tmp_path / "cfg.yaml"), "--seed", "3",
+            "--episodes", "5", "--eval-every", "2", "--eval-episodes", "4", "--qtable",
+            str(table), "--quiet"]  # fmt: skip
+    assert cli.main(argv) == 0
+    assert (run / "qtable.qtable").read_bytes() == table.read_bytes()
+    checks = list(csv.DictReader((tmp_path / "t.evals.csv").open()))
+    assert [r["episode"] for r in swept] == ["2", "4", "5"]
+    assert [c["episode"] for c in checks] == ["2", "4"]
+    figures = ("goal_rate", "mean_steps", "mean_bumps", "mean_return")
+    for row, check in zip(swept, checks):  # the check file keeps 6 significant digits
+        assert [f"{float(row[k]):.6g}" for k in figures] == [check[k] for k in figures]
+    env = KoolioEnv("room", config=str(tmp_path / "cfg.yaml"))
+    last, before = (
+        evaluate(env, load_qtable(table), 4, 3),
+        evaluate(env, load_qtable(table), 4, 3 + 1_000_000),
+    )
+    assert [float(swept[-1][k]) for k in figures] == [
+        last.goal_rate,
+        last.mean_steps,
+        last.mean_bumps,
+        last.mean_reward,
+    ]
+    assert (last.mean_steps, last.mean_reward) != (before.mean_steps, before.mean_reward)
 
 
 def test_a_run_in_another_world_records_it_in_its_table(tmp_path):

@@ -10,7 +10,8 @@ import pytest
 from koolio_pymunk.apps.cli import main
 from koolio_pymunk.apps.viewer.session import Session
 from koolio_pymunk.learning.algorithms import make_learner
-from koolio_pymunk.learning.dyna import SECTION, DynaQ, Model
+from koolio_pymunk.learning.dyna import DynaQ
+from koolio_pymunk.learning.dyna_model import SECTION, Model
 from koolio_pymunk.learning.qlambda import QLambda
 from koolio_pymunk.learning.qlearning import QLearner
 from koolio_pymunk.learning.qtable import QTable, QTableStore, load_qtable

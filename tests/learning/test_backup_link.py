@@ -12,6 +12,7 @@ import zlib
 
 import numpy as np
 import pytest
+from inputs import open_table
 
 from koolio_pymunk.learning.qtable import QTable, QTableStore, load_qtable
 from koolio_pymunk.store import files as files_mod
@@ -50,7 +51,7 @@ def _count_fsyncs(monkeypatch) -> list[int]:
 
 def test_backup_is_the_previous_file_linked_one_fsync_per_save(tmp_path, monkeypatch) -> None:
     store = QTableStore(tmp_path / "q.qtable")
-    table = store.open(LAYOUT, SENSORS, 0.0)
+    table = open_table(store, LAYOUT, SENSORS, 0.0)
     fsyncs = _count_fsyncs(monkeypatch)
     saved = _saves(store, table, 4)
     assert len(fsyncs) == 4  # the backup is not written again
@@ -65,11 +66,11 @@ def test_backup_is_the_previous_file_linked_one_fsync_per_save(tmp_path, monkeyp
 
 def test_a_table_read_from_disk_is_written_to_its_backup_once(tmp_path, monkeypatch) -> None:
     store = QTableStore(tmp_path / "q.qtable")
-    table = store.open(LAYOUT, SENSORS, 0.0)
+    table = open_table(store, LAYOUT, SENSORS, 0.0)
     saved = _saves(store, table, 2)
     store.close()
     again = QTableStore(store.path)
-    table = again.open(LAYOUT, SENSORS, 0.0)
+    table = open_table(again, LAYOUT, SENSORS, 0.0)
     fsyncs = _count_fsyncs(monkeypatch)
     table.row(7)[0] = 3.0
     again.save(table)
@@ -82,7 +83,7 @@ def test_a_table_read_from_disk_is_written_to_its_backup_once(tmp_path, monkeypa
 
 def test_a_table_changed_behind_the_store_is_not_linked(tmp_path) -> None:
     store = QTableStore(tmp_path / "q.qtable")
-    table = store.open(LAYOUT, SENSORS, 0.0)
+    table = open_table(store, LAYOUT, SENSORS, 0.0)
     saved = _saves(store, table, 2)
     os.utime(store.path, ns=(1, 1))  # another file now, for all the store knows
     _saves(store, table, 1)
@@ -92,12 +93,12 @@ def test_a_table_changed_behind_the_store_is_not_linked(tmp_path) -> None:
 
 def test_torn_table_replaced_by_its_backup_then_saved(tmp_path) -> None:
     store = QTableStore(tmp_path / "q.qtable")
-    table = store.open(LAYOUT, SENSORS, 0.0)
+    table = open_table(store, LAYOUT, SENSORS, 0.0)
     saved = _saves(store, table, 3)
     store.close()
     store.path.write_bytes(saved[-1][:40])
     again = QTableStore(store.path, warn=lambda m: None)
-    table = again.open(LAYOUT, SENSORS, 0.0)
+    table = open_table(again, LAYOUT, SENSORS, 0.0)
     assert table.meta["episodes"] == 2
     table.row(9)[1] = 1.0
     again.save(table)
@@ -113,7 +114,7 @@ def test_without_hard_links_the_backup_is_written(tmp_path, monkeypatch, err) ->
 
     monkeypatch.setattr(files_mod.os, "link", no_links)
     store = QTableStore(tmp_path / "q.qtable")
-    table = store.open(LAYOUT, SENSORS, 0.0)
+    table = open_table(store, LAYOUT, SENSORS, 0.0)
     saved = _saves(store, table, 3)
     assert store.backup.read_bytes() == saved[-2]
     assert os.stat(store.backup).st_ino != os.stat(store.path).st_ino
@@ -123,7 +124,7 @@ def test_without_hard_links_the_backup_is_written(tmp_path, monkeypatch, err) ->
 
 def test_a_backup_with_its_own_permissions_keeps_them(tmp_path) -> None:
     store = QTableStore(tmp_path / "q.qtable")
-    table = store.open(LAYOUT, SENSORS, 0.0)
+    table = open_table(store, LAYOUT, SENSORS, 0.0)
     _saves(store, table, 1)
     store.backup.chmod(0o600)
     saved = _saves(store, table, 2)
@@ -134,7 +135,7 @@ def test_a_backup_with_its_own_permissions_keeps_them(tmp_path) -> None:
 
 def test_disk_full_at_the_table_leaves_both_files_as_they_were(tmp_path, monkeypatch) -> None:
     store = QTableStore(tmp_path / "q.qtable")
-    table = store.open(LAYOUT, SENSORS, 0.0)
+    table = open_table(store, LAYOUT, SENSORS, 0.0)
     saved = _saves(store, table, 3)
 
     def full(fd: int) -> None:
@@ -153,7 +154,7 @@ def test_disk_full_at_the_table_leaves_both_files_as_they_were(tmp_path, monkeyp
 
 def test_a_failed_rename_of_the_backup_changes_nothing(tmp_path, monkeypatch) -> None:
     store = QTableStore(tmp_path / "q.qtable")
-    table = store.open(LAYOUT, SENSORS, 0.0)
+    table = open_table(store, LAYOUT, SENSORS, 0.0)
     saved = _saves(store, table, 2)
     real = os.replace
 
@@ -177,7 +178,7 @@ def _reference_bytes(table: QTable) -> bytes:
     import json
 
     header = dict(table.meta)
-    header.update(format=1, layout=table.layout.to_json(), q_init=table.q_init)
+    header.update(format=1, layout=table.layout.header_json(), q_init=table.q_init)
     hjson = json.dumps(header, sort_keys=True, separators=(",", ":")).encode()
     keys = sorted(table.rows)
     body = b"".join(

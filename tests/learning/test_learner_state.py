@@ -20,7 +20,7 @@ from inputs import expect_error, small_table
 
 from koolio_pymunk import robot_runtime as rt
 from koolio_pymunk.apps.export import policy_document
-from koolio_pymunk.learning.dyna_model import SECTION, Model, robot_layout
+from koolio_pymunk.learning.dyna_model import SECTION, Model
 from koolio_pymunk.learning.qtable import QTable
 from koolio_pymunk.store.config import LearnerConfig
 from koolio_pymunk.store.errors import QTableError
@@ -109,7 +109,7 @@ def test_both_readers_refuse_the_same_bad_models(model, words):
     infinite = message.endswith("not a finite number (JSON could not write it back)")
     assert message.startswith("p.json: model") and (words in message or infinite), message
     with pytest.raises(rt.PolicyError) as direct:
-        rt.Model.from_json(model_json(model), robot_layout(LAYOUT))
+        rt.Model.from_json(model_json(model), LAYOUT)
     assert words in str(direct.value)
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 
 import pytest
+from inputs import open_table
 
 from koolio_pymunk.learning.qtable import (
     QTable,
@@ -107,7 +108,7 @@ def test_not_a_table(tmp_path) -> None:
 
 def test_store_creates_both_files_empty(tmp_path) -> None:
     store = QTableStore(tmp_path / "runs" / "q.qtable")
-    t = store.open(LAYOUT, SENSORS, 0.0)
+    t = open_table(store, LAYOUT, SENSORS, 0.0)
     assert len(t) == 0
     assert load_qtable(store.path).rows == {}
     assert load_qtable(store.backup).rows == {}
@@ -115,7 +116,7 @@ def test_store_creates_both_files_empty(tmp_path) -> None:
 
 def test_store_backup_holds_previous_table(tmp_path) -> None:
     store = QTableStore(tmp_path / "q.qtable")
-    t = store.open(LAYOUT, SENSORS, 0.0)
+    t = open_table(store, LAYOUT, SENSORS, 0.0)
     t.row(1)[0] = 1.0
     store.save(t)
     first = store.path.read_bytes()
@@ -127,7 +128,7 @@ def test_store_backup_holds_previous_table(tmp_path) -> None:
 
 def test_corrupt_main_falls_back_to_backup_with_warning(tmp_path) -> None:
     store = QTableStore(tmp_path / "q.qtable")
-    t = store.open(LAYOUT, SENSORS, 0.0)
+    t = open_table(store, LAYOUT, SENSORS, 0.0)
     t.row(1)[0] = 1.0
     store.save(t)
     t.row(2)[0] = 2.0
@@ -136,31 +137,31 @@ def test_corrupt_main_falls_back_to_backup_with_warning(tmp_path) -> None:
     store.path.write_bytes(store.path.read_bytes()[:50])  # a torn file
     warnings: list[str] = []
     again = QTableStore(store.path, warn=warnings.append)
-    t2 = again.open(LAYOUT, SENSORS, 0.0)
+    t2 = open_table(again, LAYOUT, SENSORS, 0.0)
     assert t2.rows == {1: [1.0, 0, 0, 0, 0]}
     assert len(warnings) == 1 and "backup" in warnings[0] and "q.qtable" in warnings[0]
 
 
 def test_corrupt_main_and_backup_is_an_error(tmp_path) -> None:
     store = QTableStore(tmp_path / "q.qtable")
-    store.open(LAYOUT, SENSORS, 0.0)
+    open_table(store, LAYOUT, SENSORS, 0.0)
     store.close()
     store.path.write_bytes(b"junk")
     store.backup.write_bytes(b"junk")
     with pytest.raises(QTableError, match="backup unusable"):
-        QTableStore(store.path, warn=lambda m: None).open(LAYOUT, SENSORS, 0.0)
+        open_table(QTableStore(store.path, warn=lambda m: None), LAYOUT, SENSORS, 0.0)
 
 
 def test_layout_mismatch_is_refused_not_overwritten(tmp_path) -> None:
     store = QTableStore(tmp_path / "q.qtable")
-    store.open(LAYOUT, SENSORS, 0.0)
+    open_table(store, LAYOUT, SENSORS, 0.0)
     store.close()
     before = store.path.read_bytes()
     other = KeywordLayout(LAYOUT.fields[:-1])
     with pytest.raises(QTableError, match="layout: table made for 27-bit keyword"):
-        QTableStore(store.path).open(other, SENSORS, 0.0)
+        open_table(QTableStore(store.path), other, SENSORS, 0.0)
     with pytest.raises(QTableError, match=r"sensors\.sonar_arc_deg"):
-        QTableStore(store.path).open(LAYOUT, {"sonar_arc_deg": 60.0}, 0.0)
+        open_table(QTableStore(store.path), LAYOUT, {"sonar_arc_deg": 60.0}, 0.0)
     assert store.path.read_bytes() == before
 
 
@@ -173,7 +174,7 @@ def test_check_compatible_message_is_one_line() -> None:
 
 def test_atomic_write_keeps_old_file_when_replace_fails(tmp_path, monkeypatch) -> None:
     store = QTableStore(tmp_path / "q.qtable")
-    t = store.open(LAYOUT, SENSORS, 0.0)
+    t = open_table(store, LAYOUT, SENSORS, 0.0)
     t.row(1)[0] = 1.0
     store.save(t)
     good = store.path.read_bytes()
@@ -192,7 +193,7 @@ def test_atomic_write_keeps_old_file_when_replace_fails(tmp_path, monkeypatch) -
 
 def test_saved_files_get_normal_permissions(tmp_path) -> None:
     store = QTableStore(tmp_path / "q.qtable")
-    store.open(LAYOUT, SENSORS, 0.0)
+    open_table(store, LAYOUT, SENSORS, 0.0)
     umask = os.umask(0)
     os.umask(umask)
     assert store.path.stat().st_mode & 0o777 == 0o666 & ~umask

@@ -6,7 +6,9 @@ import csv
 
 import pytest
 
+from koolio_pymunk.learning.action_rules import allowed
 from koolio_pymunk.learning.evaluation import evaluate
+from koolio_pymunk.learning.qlearning import QLearner
 from koolio_pymunk.learning.qtable import QTableStore, load_qtable
 from koolio_pymunk.learning.training import train
 from koolio_pymunk.store.config import Config
@@ -92,16 +94,41 @@ def test_discard_unfinished_leaves_file_byte_identical(tmp_path, monkeypatch) ->
     assert log.read_bytes() == log_before
 
 
-def test_evaluate_is_greedy_and_does_not_learn(tmp_path) -> None:
-    q, _, _ = run(tmp_path, "e", 4)
+def test_evaluate_is_greedy_and_does_not_learn(tmp_path, monkeypatch) -> None:
+    """Every action of an evaluation is one of highest Q in the table's row of its state
+    (of those the no-undo rule allows; any action in a state never visited, whose row is
+    all ``q_init``), recorded step by step; the table is left as it was, the same seed
+    gives the same figures, and the outcomes' rates (wrong door included) sum to 1."""
+    q, _, _ = run(tmp_path, "e", 8)
     table = load_qtable(q)
     rows = {k: list(v) for k, v in table.rows.items()}
+    steps: list[tuple[int, int, list[int], float]] = []
+    choose = QLearner.act
+
+    def recorded(agent: QLearner, state: int) -> int:
+        row = agent.table.peek(state)
+        choices = allowed(agent.n_actions, agent.bar)
+        best = (
+            choices
+            if row is None
+            else [a for a in choices if row[a] == max(row[c] for c in choices)]
+        )
+        action = choose(agent, state)
+        steps.append((state, action, best, agent.epsilon))
+        return action
+
+    monkeypatch.setattr(QLearner, "act", recorded)
     env = small_env()
-    a = evaluate(env, table, 3, seed=0)
-    b = evaluate(env, table, 3, seed=0)
-    assert a == b
+    a = evaluate(env, table, 4, seed=0)
+    assert [(s, action) for s, action, best, _ in steps if action not in best] == []
+    assert {eps for *_, eps in steps} == {0.0}
+    told = sum(len(best) == 1 for _, _, best, _ in steps)  # a step where exploring would show
+    assert told >= 20, f"only {told} steps in states with one best action: a weak premise"
+    assert len(steps) == round(a.mean_steps * a.episodes)  # every step chose through act
+    assert evaluate(env, table, 4, seed=0) == a
     assert table.rows == rows
-    assert a.goal_rate + a.end_of_world_rate + a.truncated_rate == pytest.approx(1.0)
+    rates = (a.goal_rate, a.end_of_world_rate, a.wrong_door_rate, a.truncated_rate)
+    assert sum(rates) == pytest.approx(1.0)
 
 
 def test_the_arena_files_goal_is_read_again_when_the_file_changes(tmp_path) -> None:

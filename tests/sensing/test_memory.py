@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from inputs import open_table
 
 from koolio_pymunk import robot_runtime as rt
 from koolio_pymunk.apps.cli import main
@@ -182,7 +183,7 @@ def test_runtime_memory_gives_the_simulators_keys(tmp_path, bearing) -> None:
     env = KoolioEnv("room", config=cfg)
     store = QTableStore(tmp_path / "m.qtable")
     train(env, store, 2, seed=1, report=None)
-    doc = policy_document(store.open(env.layout, sensor_signature(cfg), -30.0), cfg)
+    doc = policy_document(open_table(store, env.layout, sensor_signature(cfg), -30.0), cfg)
     extra = {"turn_deg": 30.0, "camera_deg": [0.0, 45.0, -45.0]} if bearing else {}
     assert doc["encoding"]["memory"] == fields | extra
     policy = rt.Policy(doc)
@@ -261,7 +262,7 @@ def test_a_bad_bearing_in_a_policy_is_one_line(tmp_path, change, item) -> None:
     env = KoolioEnv("room", config=cfg)
     store = QTableStore(tmp_path / "b.qtable")
     train(env, store, 1, seed=0, report=None)
-    doc = policy_document(store.open(env.layout, sensor_signature(cfg), -30.0), cfg)
+    doc = policy_document(open_table(store, env.layout, sensor_signature(cfg), -30.0), cfg)
     rt.Policy(doc)  # the premise: the exported policy loads
     doc["encoding"]["memory"].update(change)
     with pytest.raises(rt.PolicyError) as err:

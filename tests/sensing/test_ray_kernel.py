@@ -9,10 +9,10 @@ import math
 
 import numpy as np
 import pytest
+from sensing_agreement import compare_backends, free_poses
 
 from koolio_pymunk.learning.qtable import QTableStore, sensor_signature
 from koolio_pymunk.learning.training import train
-from koolio_pymunk.sensing.agreement import compare_backends, free_poses
 from koolio_pymunk.sensing.ray_engines import FastRays, PymunkRays
 from koolio_pymunk.sensing.ray_kernel import _ray_directions, new_trig
 from koolio_pymunk.sensing.suite import SensorSuite, sonar_ray_offsets, turned, unit_vectors
@@ -27,18 +27,20 @@ ARENAS = ("hallway", "room", "obstacles")
 
 @pytest.mark.parametrize("arena", ARENAS)
 def test_fast_backend_agrees_on_random_poses(arena: str) -> None:
-    """Noise off: every distance within 1e-6 in, same markers, same encoded state."""
+    """Noise off: every distance bit for bit (the kernel repeats Chipmunk's operations;
+    docs/speed.md says so), the same markers, the same encoded state."""
     got = compare_backends(arena, 150, seed=3)
     assert (got.distance_mismatches, got.state_mismatches) == (0, 0)
-    assert got.max_abs_diff <= 1e-6
+    assert got.bit_identical == 150 and got.max_abs_diff == 0.0
 
 
 def test_fast_backend_agrees_with_noise_on() -> None:
-    """Same noise draws in the same order: same state, Bump and goal-close."""
+    """Same noise draws in the same order: the same readings bit for bit, the same state,
+    Bump and goal-close."""
     got = compare_backends("hallway", 100, seed=4, noise="uniform")
-    assert (got.distance_mismatches, got.state_mismatches) == (0, 0)
+    assert (got.distance_mismatches, got.state_mismatches, got.bit_identical) == (0, 0, 100)
     got = compare_backends("room", 60, seed=5, noise="gaussian")
-    assert (got.distance_mismatches, got.state_mismatches) == (0, 0)
+    assert (got.distance_mismatches, got.state_mismatches, got.bit_identical) == (0, 0, 60)
 
 
 @pytest.mark.parametrize("arena", ARENAS)

@@ -9,11 +9,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from sensing_agreement import compare_backends, free_poses, same_readings
 
 from koolio_pymunk.apps.cli import main
 from koolio_pymunk.learning.qtable import QTable, QTableStore
 from koolio_pymunk.learning.training import train
-from koolio_pymunk.sensing.agreement import compare_backends, free_poses, same_readings
 from koolio_pymunk.sensing.realism import (
     F_BEAM,
     F_CAMERA,

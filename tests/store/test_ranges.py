@@ -7,6 +7,7 @@ from __future__ import annotations
 import ast
 import inspect
 import itertools
+import re
 
 import pytest
 
@@ -102,9 +103,38 @@ def _numeric_fields(module) -> list[tuple[str, str, str]]:
     return out
 
 
+#: How a docstring names a range: an interval with both ends (``[0.5, 60]``, ``(0, 360)``,
+#: ``(0, robot diameter]``, ``(max(a, b), 1,000,000]``), a span of integers (``1..360``,
+#: ``0..10,000``), or the bound every number shares (``within +-1e15``).
+RANGE = re.compile(
+    r"[\[(][^\[\]()]*?(?:\([^()]*\)[^\[\]()]*?)?,\s*[^\[\]()]+[\])]"
+    r"|\b\d[\d,]*\.\.\d[\d,]*\b"
+    r"|within \+-1e15"
+)
+
+
+@pytest.mark.parametrize(
+    ("text", "names"),
+    [
+        ("``RobotRadius`` in inches, in [0.5, 60]; None takes the profile's", True),
+        ("in (max(``max_range``, ``max_camera_view``), 1,000,000] (the arenas'", True),
+        ("in (0, robot diameter]. Not given by the paper", True),
+        ("Forget a sighting after this many steps, 0..10,000 (0: never).", True),
+        ("Value of a Q entry never updated, within +-1e15.", True),
+        ("Bump < 6 <= Close < 24 <= Medium (inches) [Table 6].", False),
+        ("The count of things [sic], see (paper) §5.", False),
+        ("Steps per tick [of the window], 30 by default.", False),
+    ],
+)
+def test_what_names_a_range(text: str, names: bool) -> None:
+    """The rule of the test below, on docstrings that name a range and on some that hold
+    brackets but no range (which once passed: any ``[`` did)."""
+    assert bool(RANGE.search(text)) is names
+
+
 def test_every_field_has_a_docstring_naming_its_range() -> None:
-    """The documented ranges: every numeric field's docstring says its range (a bracket,
-    an ``a..b`` span, or the bound every number shares: 1e15)."""
+    """The documented ranges: every numeric field's docstring says its range
+    (:data:`RANGE`); the rewards share theirs, in their class docstring."""
     from koolio_pymunk.store import config, realism_config
 
     fields = _numeric_fields(config) + _numeric_fields(realism_config)
@@ -112,7 +142,7 @@ def test_every_field_has_a_docstring_naming_its_range() -> None:
     missing = [
         f"{cls}.{name}"
         for cls, name, text in fields
-        if cls != "RewardConfig"  # its class docstring says it for all
-        and not any(m in text for m in ("[", "]", "(0,", "..", "1e15", "within"))
+        if cls != "RewardConfig" and not RANGE.search(" ".join(text.split()))
     ]
     assert missing == [], missing
+    assert RANGE.search(" ".join(config.RewardConfig.__doc__.split()))

@@ -94,13 +94,6 @@ def test_polygon_self_intersection() -> None:
     assert g.polygon_self_intersection(((0, 0), (0, 0), (10, 0), (10, 10))) == (0, 1)
 
 
-def test_is_simple_polygon() -> None:
-    assert g.is_simple_polygon(SQUARE)
-    assert not g.is_simple_polygon(((0, 0), (1, 1)))
-    assert not g.is_simple_polygon(((0, 0), (1, 1), (2, 2)))
-    assert not g.is_simple_polygon(((0, 0), (10, 10), (10, 0), (0, 10)))
-
-
 def test_polygons_intersect() -> None:
     other = ((5, 5), (15, 5), (15, 15), (5, 15))
     assert g.polygons_intersect(SQUARE, other) is not None
@@ -108,16 +101,3 @@ def test_polygons_intersect() -> None:
     assert g.polygons_intersect(SQUARE, far) is None
     inner = ((2, 2), (4, 2), (4, 4))
     assert g.polygons_intersect(SQUARE, inner) is None  # containment is not an edge hit
-
-
-def test_disc_polygon() -> None:
-    disc = g.disc_polygon((1, 2), 3, n=4)
-    expected = ((4, 2), (1, 5), (-2, 2), (1, -1))
-    for p, q in zip(disc, expected, strict=True):
-        assert math.isclose(p[0], q[0], abs_tol=1e-12)
-        assert math.isclose(p[1], q[1], abs_tol=1e-12)
-    disc24 = g.disc_polygon((0, 0), 10)
-    assert len(disc24) == 24 and g.is_ccw(disc24) and g.is_simple_polygon(disc24)
-    assert all(math.isclose(math.hypot(*p), 10) for p in disc24)
-    with pytest.raises(ValueError):
-        g.disc_polygon((0, 0), 1, n=2)

@@ -6,10 +6,10 @@ import math
 
 import numpy as np
 import pytest
+from move_agreement import generated_arenas
 
 from koolio_pymunk.world.arena import Arena, load_arena
 from koolio_pymunk.world.geometry import point_in_polygon, segments_intersect
-from koolio_pymunk.world.move_agreement import generated_arenas
 from koolio_pymunk.world.physics import MAX_QUERIES, SKIN, Action, World
 
 R = 10.0

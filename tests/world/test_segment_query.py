@@ -9,9 +9,9 @@ import math
 import numpy as np
 import pymunk
 import pytest
+from move_agreement import compare_moves, generated_arenas
 
 from koolio_pymunk.world.arena import load_arena
-from koolio_pymunk.world.move_agreement import compare_moves, generated_arenas
 from koolio_pymunk.world.physics import MOTION_ONLY, SKIN, WALL_ONLY, World
 from koolio_pymunk.world.segment_query import (
     circle_query,

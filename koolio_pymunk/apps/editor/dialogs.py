@@ -47,14 +47,6 @@ class Prompt:
         """The answer typed so far."""
         return self.entry.get_text() if self.entry is not None else ""
 
-    @property
-    def selected(self) -> str:
-        """The selected part of the answer (the proposal, when the question opens)."""
-        if self.entry is None:
-            return ""
-        a, b = sorted(self.entry.select_range)
-        return self.text[a:b]
-
     def close(self) -> None:
         if self.window.alive():
             self.window.kill()

@@ -289,10 +289,6 @@ class EditorModel:
         """True when the document differs from the file it was opened from or saved to."""
         return self._saved is None or _content(self._arena) != _content(self._saved)
 
-    @property
-    def dragging(self) -> bool:
-        return self._drag_before is not None
-
     def problem(self) -> Problem | None:
         """The validator's first problem with the document, or None when it is valid."""
         cached = self._checked

@@ -123,6 +123,11 @@ def run_script(app: EditorApp, path: str | FilePath) -> None:
         text = read_text(path, limits.MAX_SCRIPT_BYTES, "editor script")
     except KoolioError as exc:
         raise ScriptError(str(exc)) from None
+    run_text(app, text, source)
+
+
+def run_text(app: EditorApp, text: str, source: str = "<script>") -> None:
+    """Run the script ``text`` (of the file ``source``) against ``app``."""
     run_commands(app, parse_script(text, source), source)
 
 
@@ -136,11 +141,6 @@ def run_commands(app: EditorApp, commands: list[Command], source: str = "<script
             raise ScriptError(f"{source}:{cmd.line}: {cmd.name}: {exc}") from None
         except KoolioError as exc:
             raise ScriptError(f"{source}:{cmd.line}: {exc}") from None
-
-
-def run_lines(app: EditorApp, text: str) -> None:
-    """Run script text (tests and the interactive console)."""
-    run_commands(app, parse_script(text), "<script>")
 
 
 # =========================================================================================

@@ -107,20 +107,10 @@ def _size(text: str) -> tuple[int, int]:
 MAX_STEPS = 10**12
 
 
-def _speed(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not SPEED_MIN <= v <= SPEED_MAX:
-        raise argparse.ArgumentTypeError(f"must be in {SPEED_MIN:g}..{SPEED_MAX:g}, got {v:g}")
-    return v
-
-
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """The flags of ``train`` plus the window's own."""
     from ..cli import add_env_args, add_learning_files_args
-    from ..flags import MAX_EPISODES, file_name, int_type
+    from ..flags import MAX_EPISODES, file_name, float_type, int_type
 
     add_env_args(p)
     p.add_argument(
@@ -175,7 +165,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--clockless", action="store_true", help="start in clockless mode")
     p.add_argument(
         "--speed",
-        type=_speed,
+        type=float_type(SPEED_MIN, SPEED_MAX),
         default=10.0,
         help=f"clock speed, steps per second ({SPEED_MIN:g}..{SPEED_MAX:g}, default 10)",
     )
@@ -193,10 +183,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def _check_args(args: argparse.Namespace) -> tuple[int, Path] | None:
     if args.greedy and args.learn:
         raise KoolioError("--greedy, --learn: choose one (watch the table, or learn into it)")
-    if args.episodes is not None and args.episodes < 0:
-        raise KoolioError(f"--episodes: must be >= 0, got {args.episodes}")
-    if args.steps is not None and args.steps < 0:
-        raise KoolioError(f"--steps: must be >= 0, got {args.steps}")
     if args.screenshot is not None:
         check_png(args.screenshot, "--screenshot")
     if args.screenshot_every is None:
@@ -343,8 +329,21 @@ def _headless() -> bool:
 
 
 def _quit_pygame() -> None:
-    import pygame
+    """Close the display and let the window go.
 
+    pygame_gui keeps the first ``UIManager`` made in a module global (its default
+    manager), and the window's manager holds the window (its panel follows the app's
+    pointer), so the window, its env, the world and the world's pymunk spaces would
+    otherwise stay alive until the interpreter's very last garbage collection. That one
+    runs after cffi has stopped calling back into Python: pymunk's finalizer of a space
+    then cannot list the space's bodies, frees the space, and a body's finalizer removes
+    the body from the freed space: a segfault at exit (``view --episodes 0``, which draws
+    nothing, made the collection order that crashes). Without the global the window is
+    collected with everything else while the interpreter still runs."""
+    import pygame
+    from pygame_gui.core.utility import set_default_manager
+
+    set_default_manager(None)
     pygame.display.quit()
 
 

@@ -22,12 +22,11 @@ import pygame
 from ...sensing.suite import compass_code
 from ...store.config import BEARINGS
 from ...store.keyword import CAMERA_LEVELS, COMPASS_LEVELS, SONAR_LEVELS
+from ...task.drawing import Color
 from ...task.env import KoolioEnv
 from ...world.physics import ACTION_NAMES
 from ..plotting import moving_average
 from .session import Session
-
-Color = tuple[int, int, int]
 
 PANEL_BG: Color = (243, 244, 247)
 PANEL_EDGE: Color = (150, 156, 168)

@@ -42,7 +42,7 @@ from koolio_pymunk.apps.editor import limits
 from koolio_pymunk.apps.editor.app import EditorApp
 from koolio_pymunk.apps.editor.launch import grid_inches, window_size
 from koolio_pymunk.apps.editor.model import EditorModel
-from koolio_pymunk.apps.editor.script import COMMANDS, run_lines
+from koolio_pymunk.apps.editor.script import COMMANDS, run_text
 from koolio_pymunk.store.errors import KoolioError
 from koolio_pymunk.world.arena import load_arena
 
@@ -171,7 +171,7 @@ def run_case(app: EditorApp, text: str, room: Path, original: bytes, label: str)
     signal.setitimer(signal.ITIMER_REAL, CASE_SECONDS)
     start = time.perf_counter()
     try:
-        run_lines(app, text)
+        run_text(app, text)
         outcome = "ran"
     except KoolioError as exc:
         message = str(exc)

@@ -15,7 +15,7 @@ os.environ["SDL_AUDIODRIVER"] = "dummy"
 
 from koolio_pymunk.apps.editor.app import EditorApp
 from koolio_pymunk.apps.editor.model import EditorModel, importer_header
-from koolio_pymunk.apps.editor.script import ScriptError, run_lines
+from koolio_pymunk.apps.editor.script import ScriptError, run_text
 from koolio_pymunk.world.arena import load_arena
 
 REPO = Path(__file__).resolve().parents[3]
@@ -43,7 +43,7 @@ def test_importer_reproduces_the_shipped_hallway(tmp_path: Path) -> None:
 def test_importer_through_the_editor_keys(tmp_path: Path) -> None:
     app = EditorApp(EditorModel.blank(), (900, 500))
     out = tmp_path / "h.yaml"
-    run_lines(
+    run_text(
         app,
         f"key ctrl+d\nkey backspace\ntype {DOORS}\nkey return\n"
         f"expect_valid\nkey ctrl+s\ntype {out}\nkey return\n",
@@ -61,7 +61,7 @@ def test_a_table_in_inches_gives_the_same_hallway(tmp_path: Path) -> None:
     inches.write_text(yaml.safe_dump(table, sort_keys=False))
     app = EditorApp(EditorModel.blank(), (900, 500))
     out = tmp_path / "h.yaml"
-    run_lines(app, f"import_doors {inches}\nsave {out}\n")
+    run_text(app, f"import_doors {inches}\nsave {out}\n")
     assert body(out) == body(HALLWAY)
 
 
@@ -70,7 +70,7 @@ def test_a_bad_table_is_refused_with_its_line(tmp_path: Path) -> None:
     bad.write_text(DOORS.read_text().replace("tiles: 9,", "tiles: 9, inches: 3,"))
     app = EditorApp(EditorModel.blank(), (900, 500))
     with pytest.raises(ScriptError) as info:
-        run_lines(app, f"new\nimport_doors {bad}\n")
+        run_text(app, f"new\nimport_doors {bad}\n")
     assert str(info.value) == (
         f"<script>:2: {bad}: doors[1]: give exactly one of tiles or inches "
         "(distance from the hallway's end)"

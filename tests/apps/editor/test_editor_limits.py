@@ -29,7 +29,7 @@ from koolio_pymunk.apps.editor.app import EditorApp
 from koolio_pymunk.apps.editor.items import EditError
 from koolio_pymunk.apps.editor.launch import grid_inches, window_size
 from koolio_pymunk.apps.editor.model import EditorModel
-from koolio_pymunk.apps.editor.script import ScriptError, parse_script, run_lines
+from koolio_pymunk.apps.editor.script import ScriptError, parse_script, run_text
 from koolio_pymunk.store.errors import ArenaError, KoolioError
 from koolio_pymunk.world.arena import Arena, Door, Goal, Start, load_arena
 
@@ -114,7 +114,7 @@ def test_a_script_value_out_of_range_fails_its_line_and_does_nothing(
     before, cam = app.model.arena, (app.camera.center, app.camera.zoom)
     snap, tile, history = app.model.snap_step, app.model.tile, len(app.model.undo_stack)
     with time_limit(20), pytest.raises(ScriptError) as err:
-        run_lines(app, line + "\n")
+        run_text(app, line + "\n")
     text = str(err.value)
     assert "\n" not in text and text.startswith("<script>:1: ")
     assert message in text, text
@@ -133,7 +133,7 @@ def test_a_script_too_large_is_refused_before_anything_runs() -> None:
 
 def test_values_at_the_ends_of_the_ranges_are_accepted(tmp_path: Path) -> None:
     app, _ = room_app(tmp_path)
-    run_lines(
+    run_text(
         app,
         "grid 1\ngrid 1000\nsnap 0.01\nsnap 1000\nsnap off\nview 0 0 0.05\n"
         "view -1000000 1000000 20\nview 0 0 20\nwheel 100 0 0\nwheel -100 0 0\n"
@@ -148,19 +148,19 @@ def test_values_at_the_ends_of_the_ranges_are_accepted(tmp_path: Path) -> None:
 def test_undo_and_redo_a_billion_times_stop_at_the_ends_at_once(tmp_path: Path) -> None:
     app, _ = room_app(tmp_path)
     original = app.model.arena
-    run_lines(app, "move_vertex walls[1] 100 0\nstart 60 60\nheading 90\n")
+    run_text(app, "move_vertex walls[1] 100 0\nstart 60 60\nheading 90\n")
     edited = app.model.arena
     start = time.perf_counter()
     with time_limit(20):
-        run_lines(app, "undo 1000000000\n")
+        run_text(app, "undo 1000000000\n")
         assert app.model.arena == original and app.message == "undo: move walls[1] to (100, 0)"
-        run_lines(app, "undo 1000000000\n")
+        run_text(app, "undo 1000000000\n")
         assert app.model.arena == original and app.message == "nothing to undo"
-        run_lines(app, "redo 2\n")
+        run_text(app, "redo 2\n")
         assert app.model.arena.start.at == (60, 60) and app.model.arena.start.heading_deg is None
-        run_lines(app, "redo 1000000000\n")
+        run_text(app, "redo 1000000000\n")
         assert app.model.arena == edited and app.message == "redo: start heading 90 deg"
-        run_lines(app, "undo 2\nredo\nredo\n")
+        run_text(app, "undo 2\nredo\nredo\n")
         assert app.model.arena == edited
     assert time.perf_counter() - start < 5  # a loop of 1e9 would take hours
 
@@ -280,7 +280,7 @@ def test_a_typed_position_or_an_arrow_out_of_range_is_refused_in_the_status_bar(
     tmp_path: Path,
 ) -> None:
     app, _ = room_app(tmp_path)
-    run_lines(app, "select start\n")
+    run_text(app, "select start\n")
     for typed in ("1e300 5", "nan 5", "5 inf", "1000001 0", "-1e400 0"):
         for event in (
             pygame.event.Event(pygame.KEYDOWN, key=pygame.K_p, mod=0, unicode="p", scancode=0),
@@ -293,7 +293,7 @@ def test_a_typed_position_or_an_arrow_out_of_range_is_refused_in_the_status_bar(
         assert app.message_is_error and "is out of range" in app.message, app.message
         assert app.model.arena.start.at == (48, 48)
         app.render()
-    run_lines(app, "move_vertex walls[1] 999990 0\nselect walls[1]\n")
+    run_text(app, "move_vertex walls[1] 999990 0\nselect walls[1]\n")
     key(app, pygame.K_RIGHT)  # one snap step (24 in) past the range
     assert app.message_is_error
     assert app.message.startswith("walls[1]: (1000014, 0) is out of range")
@@ -305,7 +305,7 @@ def test_a_typed_position_or_an_arrow_out_of_range_is_refused_in_the_status_bar(
 
 def test_a_click_past_the_range_lands_on_its_edge(tmp_path: Path) -> None:
     app, _ = room_app(tmp_path)
-    run_lines(app, f"view {limits.MAX_COORDINATE:g} 0 0.05\nkey w\n")
+    run_text(app, f"view {limits.MAX_COORDINATE:g} 0 0.05\nkey w\n")
     app.handle(pygame.event.Event(pygame.MOUSEBUTTONDOWN, pos=(650, 300), button=1, mod=0))
     app.handle(pygame.event.Event(pygame.MOUSEBUTTONUP, pos=(650, 300), button=1, mod=0))
     assert not app.message_is_error
@@ -362,7 +362,7 @@ def test_drawing_stays_near_the_canvas_at_every_zoom(
     ):  # fmt: skip
         seen.clear()
         start = time.perf_counter()
-        run_lines(app, line + "\n")
+        run_text(app, line + "\n")
         app.render()
         assert seen and max(seen) < far, (line, max(seen))
         assert time.perf_counter() - start < 5, line  # before: about 0.7 s a frame
@@ -375,7 +375,7 @@ def test_the_clipped_arena_looks_the_same_on_the_canvas(
     path = tmp_path / "wide.yaml"
     path.write_text(BIG.replace("1000000", "30000").replace("999000", "29000"))
     app = EditorApp(EditorModel.from_file(path), (1000, 600))
-    run_lines(app, "view 0 -29000 1\n")  # within SAFE_PIXELS: drawn whole
+    run_text(app, "view 0 -29000 1\n")  # within SAFE_PIXELS: drawn whole
     app.show_lengths = False
     app.render()
     whole = pygame.image.tobytes(app.screen, "RGB")
@@ -420,5 +420,5 @@ def test_a_door_beyond_the_walls_and_empty_clips_draw(tmp_path: Path) -> None:
     m = EditorModel(replace(arena, doors=(*arena.doors, door)))
     app = EditorApp(m, (1000, 600))
     for line in ("view 5000 5000 20", "view 0 0 20", "view 800 44 20", "view fit"):
-        run_lines(app, line + "\n")
+        run_text(app, line + "\n")
         app.render()

@@ -361,6 +361,39 @@ def test_view_with_no_episode_to_run_shows_the_start(tmp_path, config) -> None:
         assert table.read_bytes() == before
 
 
+LEFT_ALIVE = """
+import gc, sys
+import pymunk
+from koolio_pymunk.apps.cli import main
+code = main(sys.argv[1:])
+gc.collect()
+print(code, sum(isinstance(o, pymunk.Space) for o in gc.get_objects()))
+"""
+
+
+def test_view_lets_its_world_go_when_it_returns(tmp_path, config) -> None:
+    """After ``view`` returns, nothing holds its world: pygame_gui's default manager (a
+    module global) held the window and so the world's pymunk spaces until the
+    interpreter's last garbage collection, where pymunk's finalizers run without their
+    cffi callbacks and removed bodies from a freed space (``view --episodes 0`` segfaulted
+    at exit). A fresh interpreter, so that no other test's world is counted; the real
+    process then exits 0."""
+    import subprocess
+    import sys
+
+    argv = ["--arena", "room", "--config", str(config)]
+    table = tmp_path / "q.qtable"
+    assert main(["train", *argv, "--qtable", str(table), "--episodes", "1", "--quiet"]) == 0
+    view = ["view", *argv, "--greedy", "--qtable", str(table), "--episodes", "0", "--steps", "3"]
+    env = {**os.environ, "SDL_VIDEODRIVER": "dummy"}
+    left = subprocess.run(
+        [sys.executable, "-c", LEFT_ALIVE, *view], capture_output=True, text=True, env=env
+    )
+    assert left.stdout.splitlines()[-1] == "0 0", left.stdout + left.stderr
+    p = subprocess.run([sys.executable, "-m", "koolio_pymunk", *view], capture_output=True, env=env)
+    assert p.returncode == 0, p.stderr
+
+
 def test_train_resumes_a_table_from_the_window(tmp_path, config) -> None:
     """Hand a table from the window to ``train``: 2 + 1 episodes == 3 in one go."""
     argv = ["--arena", "room", "--config", str(config), "--seed", "2"]

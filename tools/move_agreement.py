@@ -30,12 +30,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..store.errors import KoolioError
-from .arena import Arena, load_arena, parse_arena
-from .geometry import distance_point_segment, point_in_polygon
-from .physics import SKIN, TWO_PI, World
-from .segment_query import wall_array
-from .swept_move import move
+from koolio_pymunk.store.errors import KoolioError
+from koolio_pymunk.world.arena import Arena, load_arena, parse_arena
+from koolio_pymunk.world.geometry import distance_point_segment, point_in_polygon
+from koolio_pymunk.world.physics import SKIN, TWO_PI, World
+from koolio_pymunk.world.segment_query import wall_array
+from koolio_pymunk.world.swept_move import move
 
 #: Probability that a move starts at a new random free point.
 RESTART = 0.03
