@@ -19,11 +19,12 @@ from typing import TYPE_CHECKING, Any
 
 import gymnasium as gym
 
+from ._version import __version__
+
 if TYPE_CHECKING:
     from .task.env import KoolioEnv
 
 __all__ = ["KoolioEnv", "__version__"]
-__version__ = "0.1.0"
 
 gym.register(
     id="koolio_pymunk/Hallway-v0",

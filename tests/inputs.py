@@ -14,7 +14,9 @@ from pathlib import Path
 import pytest
 
 from koolio_pymunk.apps import cli
-from koolio_pymunk.learning.qtable import MAGIC, QTable, QTableStore, sensor_signature
+from koolio_pymunk.learning import run_identity
+from koolio_pymunk.learning.qtable import MAGIC, QTable, QTableStore
+from koolio_pymunk.learning.run_identity import RunIdentity, sensor_signature
 from koolio_pymunk.store.config import Config, state_fields
 from koolio_pymunk.store.keyword import KeywordLayout
 from koolio_pymunk.world.arena import arena_record, load_arena
@@ -61,13 +63,70 @@ def expect_error(
 
 
 # -- tables -----------------------------------------------------------------------------------
-def open_table(store: QTableStore, *args: object) -> QTable:
-    """``store``'s table, locked: loaded (:meth:`QTableStore.load`'s arguments), or a new
-    one created (its files written), as a run opens its table."""
-    table = store.load(*args)
+def made_for(layout: KeywordLayout, sensors: dict) -> RunIdentity:
+    """The identity of a run of ``layout`` and ``sensors`` (no arena; one-step Q): what
+    ``inspect`` compares."""
+    return RunIdentity(layout, json.dumps(sensors, sort_keys=True), None, None, "ideal", None)
+
+
+def open_table(
+    store: QTableStore,
+    layout: KeywordLayout,
+    sensors: dict,
+    q_init: float,
+    arena: dict | None = None,
+) -> QTable:
+    """``store``'s table, locked: loaded (refused when not of ``layout`` and ``sensors``),
+    or a new one created (its files written), as a run opens its table."""
+
+    def new() -> QTable:
+        meta: dict = {"sensors": sensors, "episodes": 0}
+        if arena is not None:
+            meta["arena"] = dict(arena)
+        return QTable(layout, meta, q_init)
+
+    def check(t: QTable) -> None:
+        run_identity.check(t, made_for(layout, sensors), "inspect", str(store.path))
+
+    table = store.load(new, check)
     if store.fresh:
         store.create(table)
     return table
+
+
+def learned(path: str | Path) -> tuple[str | None, str]:
+    """The run id of the table at ``path`` and a hash of what it learned
+    (:func:`~koolio_pymunk.learning.run_identity.learned_digest`): equal for two tables of
+    the same seeded run made under other command lines (whose files differ in the
+    provenance they record)."""
+    from koolio_pymunk.learning.qtable import load_qtable
+
+    table = load_qtable(path)
+    return table.meta.get("run_id"), run_identity.learned_digest(table)
+
+
+def same_run(a: str | Path, b: str | Path) -> bool:
+    """Two files of the same seeded run made under other command lines: a table's run id
+    and learned content (:func:`learned`), a policy's document without its provenance,
+    any other file's bytes."""
+    a, b = Path(a), Path(b)
+    if a.suffix == ".qtable":
+        return learned(a) == learned(b)
+    if a.name.endswith(".json") and a.read_bytes()[:1] == b"{":
+        docs = [json.loads(p.read_text()) for p in (a, b)]
+        for doc in docs:
+            doc.pop("provenance", None)
+        return docs[0] == docs[1]
+    return a.read_bytes() == b.read_bytes()
+
+
+def log_body(log: bytes | str | Path) -> str:
+    """A log's text without its run line (which names its run: two runs of other
+    configurations that log the same rows differ only there)."""
+    text = log.decode() if isinstance(log, bytes) else log if isinstance(log, str) else ""
+    if isinstance(log, Path):
+        text = log.read_text(encoding="utf-8")
+    return text.split("\n", 1)[1] if text.startswith("# ") else text
 
 
 def small_table() -> QTable:

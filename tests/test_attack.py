@@ -9,7 +9,6 @@ patching the system call that would fail.
 
 from __future__ import annotations
 
-import csv
 import errno
 import json
 import os
@@ -28,6 +27,7 @@ from koolio_pymunk import robot_runtime as rt
 from koolio_pymunk.apps import cli
 from koolio_pymunk.learning.qtable import QTableStore, load_qtable
 from koolio_pymunk.store import files as files_mod
+from koolio_pymunk.store.episode_log import log_rows
 from koolio_pymunk.store.errors import InUseError
 from koolio_pymunk.store.locks import FileLock
 
@@ -44,8 +44,7 @@ def run_cli(capsys, *argv: str) -> tuple[int, str, str]:
 
 def log_numbers(path: Path) -> tuple[list[int], list[int]]:
     """Episode numbers of the finished and of the interrupted rows of a log."""
-    with open(path, newline="") as fh:
-        rows = list(csv.DictReader(fh))
+    rows = log_rows(path)
     done = [int(r["episode"]) for r in rows if r["outcome"] != "interrupted"]
     cut = [int(r["episode"]) for r in rows if r["outcome"] == "interrupted"]
     return done, cut

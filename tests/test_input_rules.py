@@ -12,7 +12,8 @@ from inputs import small_table
 
 from koolio_pymunk.apps import cli
 from koolio_pymunk.apps.export import check_sensor_signature
-from koolio_pymunk.learning.qtable import QTable, load_qtable, sensor_signature
+from koolio_pymunk.learning.qtable import QTable, load_qtable
+from koolio_pymunk.learning.run_identity import sensor_signature
 from koolio_pymunk.robot_runtime import field_bits
 from koolio_pymunk.store.config import LIMITS, MAX_CONFIG_BYTES, MAX_NUMBER, config_from_dict
 from koolio_pymunk.store.errors import ConfigError
@@ -138,7 +139,7 @@ def test_extreme_rewards_keep_q_values_finite(tmp_path: Path, capsys) -> None:
 # -- table headers ------------------------------------------------------------------------------
 @pytest.mark.parametrize("backend", ["fast", "cone", "pymunk"])
 def test_every_sensor_signature_exports(backend: str) -> None:
-    """A key added to ``training.sensor_signature`` keeps what export reads of it."""
+    """A key added to ``run_identity.sensor_signature`` keeps what export reads of it."""
     cfg = config_from_dict({"sensors": {"backend": backend}})
     check_sensor_signature(sensor_signature(cfg), "t.qtable")
 

@@ -16,7 +16,8 @@ from koolio_pymunk import robot_runtime as rt
 from koolio_pymunk.apps.export import policy_document, write_policy
 from koolio_pymunk.learning.episodes import EpisodeResult
 from koolio_pymunk.learning.qlearning import QLearner
-from koolio_pymunk.learning.qtable import QTable, sensor_signature
+from koolio_pymunk.learning.qtable import QTable
+from koolio_pymunk.learning.run_identity import sensor_signature
 from koolio_pymunk.store.config import (
     Config,
     LearnerConfig,

@@ -347,6 +347,16 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _main(argv: Sequence[str] | None) -> int:
+    from ..store import provenance
+
+    provenance.COMMAND = list(sys.argv[1:] if argv is None else argv)  # a new table's record
+    try:
+        return _command(argv)
+    finally:
+        provenance.COMMAND = None  # tables made from Python afterwards record none
+
+
+def _command(argv: Sequence[str] | None) -> int:
     try:
         args = build_parser().parse_args(argv)
     except SystemExit as exc:  # --help, --version (0), or a bad flag (2: one line said)
@@ -413,6 +423,7 @@ def warn_endless(cfg) -> None:
 
 def cmd_train(args: argparse.Namespace) -> int:
     from ..learning.qtable import QTableStore
+    from ..learning.run_identity import RunIdentity
     from ..learning.training import RunFiles, train
 
     checks = _eval_every_args(args)
@@ -430,7 +441,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     if args.init_qtable:
         start = _check_init_table(args.init_qtable, store, args.log, env)
     else:
-        start = RunFiles.check(env, store, args.log)
+        start = RunFiles.check(RunIdentity.of_run(env), store, args.log)
         if start is not None:  # a warning (stderr, --quiet too) when the backup stands in
             store.peek(warn=True)
     done = 0 if start is None else int(start.meta.get("episodes", 0))
@@ -439,7 +450,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     if args.verbose:
         _print_configuration(args, env, say)
     if args.init_qtable:
-        _seed_table(args.init_qtable, store, args.log, env)
+        _seed_table(args.init_qtable, store, args.log, env, args.seed)
     if more == 0:
         store.close()
         return 0
@@ -688,7 +699,7 @@ def check_discard(env, robots: int) -> None:
 def _check_init_table(init_path: str, store, log: str, env):
     """``--init-qtable``'s checks that need no lock: the table to start from is readable
     and made for this run's sensors, ``--qtable`` is new, and so is the log."""
-    from ..learning.qtable import check_compatible, sensor_signature
+    from ..learning import run_identity
     from ..store.episode_log import check_log_path, log_rows
     from .export import load_any_table
 
@@ -698,7 +709,7 @@ def _check_init_table(init_path: str, store, log: str, env):
             "instead (choose a new --qtable)"
         )
     table = load_any_table(init_path)
-    check_compatible(table, env.layout, sensor_signature(env.config), init_path)
+    run_identity.check(table, env, "start", init_path, warn=lambda msg: None)
     if log:
         check_log_path(log, store.path)
     if log and log_rows(log):
@@ -708,25 +719,22 @@ def _check_init_table(init_path: str, store, log: str, env):
     return table
 
 
-def _seed_table(init_path: str, store, log: str, env) -> None:
-    """``--init-qtable``: start a new table file from another table (either format). The
-    new table's log must be new too (its episodes continue the other table's count).
-    The checks of :func:`_check_init_table` are made again under the lock."""
-    from ..learning.algorithms import adopt
-    from ..learning.qtable import RECORD_KEYS, check_compatible, sensor_signature
-    from ..learning.training import run_record
-    from ..world.arena import arena_record
+def _seed_table(init_path: str, store, log: str, env, seed: int) -> None:
+    """``--init-qtable``: start a new table file from another table (either format): its
+    Q values, this run's identity (algorithm, goal, world, arena) and provenance, which
+    names the table it started from. The new table's log must be new too (its episodes
+    continue the other table's count). The checks of :func:`_check_init_table` are made
+    again under the lock."""
+    from ..learning import run_identity
 
     store.lock()
     try:
         table = _check_init_table(init_path, store, log, env)
-        check_compatible(  # again, for the warning of a table learned in another arena
-            table, env.layout, sensor_signature(env.config), init_path, arena_record(env.arena)
-        )
-        adopt(table, env.config.learner, init_path)  # its Q values, this run's algorithm
-        for key in RECORD_KEYS:  # from now on it learns for this run's goal and world
-            table.meta.pop(key, None)
-        table.meta.update(run_record(env))
+        run_identity.check(table, env, "start", init_path)  # again, with its warnings
+        origin = {"file": str(init_path), "run_id": table.meta.get("run_id")}
+        origin["episodes"] = int(table.meta.get("episodes", 0))
+        run = run_identity.RunIdentity.of_run(env)
+        run_identity.stamp(table, run, new=True, seed=seed, origin=origin)
         store.create(table)
     except BaseException:
         store.close()
@@ -734,10 +742,8 @@ def _seed_table(init_path: str, store, log: str, env) -> None:
 
 
 def cmd_eval(args: argparse.Namespace) -> int:
-    from ..learning.algorithms import check_rule
+    from ..learning import run_identity
     from ..learning.evaluation import evaluate
-    from ..learning.qtable import check_compatible, sensor_signature
-    from ..world.arena import arena_record
 
     eps = args.epsilon
     goal_all = args.goal == "all"
@@ -746,11 +752,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
     env = _make_env(args)
     table = read_table(args.qtable)
     policy = is_policy_file(args.qtable)
-    check_compatible(
-        table, env.layout, sensor_signature(env.config), args.qtable, arena_record(env.arena)
-    )
-    check_rule(table, env.config.learner, args.qtable, "give eval the --config it was learned with")
-    warn_table(table, args.qtable, env, policy)
+    run_identity.check(table, env, "score", args.qtable)
     goals = env.arena.goal_names() if goal_all else [None]
     announce_compile(env)
     epsilon = eps or 0.0
@@ -767,7 +769,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
     how = "greedy evaluation" if not epsilon else f"evaluation (epsilon {epsilon:g})"
     print(
         f"{how} of {args.qtable} ({count(table.meta.get('episodes', 0), 'episode')}, "
-        f"{_trained_for(table, env, policy)})"
+        f"{_trained_for(table, env, args.qtable, policy)})"
     )
     print(
         f"  scored in {where}: {count(args.episodes, 'episode')} per goal, seed {args.seed}, "
@@ -828,53 +830,29 @@ def _starts_with_brace(p: Path) -> bool:
         return False
 
 
-def _trained_for(table, env, policy: bool = False) -> str:
-    """``trained for goal 311 in the ideal world``, from what the table records (a
-    policy file records neither). The goal is named by its number only when the table was
-    learned in this arena (its name and content); a table of another arena names that
-    arena and its goal as recorded: ``trained in arena hallway for its active goal, in
-    the ideal world`` (a table records its goal only when it is not its arena's
-    active one, and this arena's active goal is not that arena's)."""
-    from ..learning.qtable import describe_goal, describe_world
-    from ..learning.training import table_arena_goal
+def _trained_for(table, env, source: str, policy: bool = False) -> str:
+    """``trained for goal 311 in the ideal world``, from what the table (or policy file)
+    records (:class:`~koolio_pymunk.learning.run_identity.RunIdentity`). The goal is
+    named by its number only when the table was learned in this arena (its name and
+    content); a table of another arena names that arena and its goal
+    as recorded: ``trained in arena hallway for its active goal, in the ideal world`` (a
+    table records its goal only when it is not its arena's active one, and this arena's
+    active goal is not that arena's)."""
+    from ..learning.run_identity import RunIdentity, describe_goal, describe_world
     from ..store.errors import shown
 
-    if policy:
-        return "a policy file: its goal and world are not recorded"
-    world = describe_world(table.meta)
-    home = table_arena_goal(table, env)
-    arena = table.meta.get("arena")
-    if home is not None or not isinstance(arena, dict):
-        return f"trained for {describe_goal(table.meta, home)} in {world}"
-    name = arena.get("name")
+    theirs = RunIdentity.of_table(table, source, RunIdentity.of_run(env))
+    if policy and theirs.arena is None:  # a policy from before policies recorded these
+        return "a policy file that does not record its arena"
+    world = describe_world(theirs.world)
+    if theirs.home_goal is not None or theirs.arena is None:
+        return f"trained for {describe_goal(theirs.goal, theirs.home_goal)} in {world}"
+    name = theirs.arena[0]
     other = "another version of arena" if name == env.arena.name else "arena"
-    if not (isinstance(name, str) and name.isprintable() and len(name) <= 60):
+    if not (name.isprintable() and len(name) <= 60):
         name = shown(name, 60)  # a header's string, on the report's one line
-    goal = "its active goal" if "goal" not in table.meta else describe_goal(table.meta)
+    goal = "its active goal" if theirs.goal is None else describe_goal(theirs.goal)
     return f"trained in {other} {name} for {goal}, in {world}"
-
-
-def warn_table(table, source: str, env, policy: bool = False, verb: str = "scored") -> None:
-    """Warnings before scoring (``verb``: or watching) a table: it holds no episodes, or
-    it was trained in another world than the one it is scored in (a transfer: its figure
-    is not its training's; unknown for a ``policy`` file)."""
-    from ..learning.qtable import describe_world
-    from ..store.worlds import world_label
-
-    if int(table.meta.get("episodes", 0)) == 0:
-        print(
-            f"warning: {source}: holds 0 episodes (an empty table: its greedy policy is "
-            "arbitrary); train it first",
-            file=sys.stderr,
-        )
-    world = world_label(env.world_name)
-    if not policy and table.meta.get("world", "ideal") != world:
-        here = {} if world == "ideal" else {"world": world}
-        print(
-            f"warning: {source}: trained in {describe_world(table.meta)}, {verb} here in "
-            f"{describe_world(here)}",
-            file=sys.stderr,
-        )
 
 
 def cmd_check_arena(args: argparse.Namespace) -> int:
@@ -938,15 +916,9 @@ def _describe_table(table, path: str, cfg, config: str | None, shown) -> None:
     """``info``'s lines on a table: its figures (the share of its own layout's dense
     table, the file's size), where and how it was learned, and whether ``cfg`` (the
     configuration ``config`` names, or the defaults) is the one it was made with."""
-    from ..learning.qtable import (
-        check_compatible,
-        describe_goal,
-        describe_world,
-        human_bytes,
-        sensor_signature,
-    )
-    from ..store.config import state_fields
-    from ..store.keyword import KeywordLayout
+    from ..learning import run_identity
+    from ..learning.qtable import human_bytes
+    from ..learning.run_identity import RunIdentity, describe_goal, describe_world
 
     share = table.entries / table.layout.n_entries
     size = os.stat(path).st_size
@@ -956,11 +928,11 @@ def _describe_table(table, path: str, cfg, config: str | None, shown) -> None:
         f"({share:.3%} of its dense table), {in_file} in the file, "
         f"{table.meta.get('episodes', 0)} episodes"
     )
-    arena = table.meta.get("arena")
-    if isinstance(arena, dict):
+    theirs = RunIdentity.of_table(table, path)
+    if theirs.arena is not None:
         print(
-            f"  learned in arena {arena.get('name')} for {describe_goal(table.meta)}, "
-            f"in {describe_world(table.meta)}"
+            f"  learned in arena {theirs.arena[0]} for {describe_goal(theirs.goal)}, "
+            f"in {describe_world(theirs.world)}"
         )
     rec = table.meta.get("algorithm")
     if isinstance(rec, dict):
@@ -971,13 +943,14 @@ def _describe_table(table, path: str, cfg, config: str | None, shown) -> None:
         )
     if table.layout != shown:
         print(f"  its keyword ({table.layout.total_bits} bits): {_keyword_line(table.layout)}")
-    layout = KeywordLayout(tuple(state_fields(cfg.sensors)))
     try:
-        check_compatible(table, layout, sensor_signature(cfg), path)
+        run_identity.check(table, RunIdentity.of_config(cfg), "inspect", path)
     except KoolioError as exc:
         which = f"--config {config}" if config else "the default configuration (no --config)"
         problem = str(exc).removeprefix(f"{path}: ")
         print(f"  not a table of {which}: {problem}")
+    for line in run_identity.describe_provenance(table, cfg):
+        print(f"  {line}")
 
 
 def _cached(dispatcher) -> bool:

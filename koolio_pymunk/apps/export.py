@@ -9,8 +9,9 @@ keeps learning that policy on the robot and saves it back in the same format.
 
 The robot's learning settings (``learner``: alpha, gamma, epsilon, and the algorithm with
 its parameters when it is not one-step Q) come from ``--config``, like the rewards: the
-configuration the table was learned with (:func:`check_configuration` refuses another
-keyword layout, sensor signature or algorithm, as ``eval`` and ``train`` do). A
+configuration the table was learned with (:func:`~koolio_pymunk.learning.run_identity.check`,
+purpose ``export``: another keyword layout, sensor signature, algorithm or choice rule is
+refused, another world is said). A
 Dyna-Q model is never exported (it describes the simulated world, and the robot builds its
 own from real steps), nor read back from a policy file.
 
@@ -36,19 +37,18 @@ from pathlib import Path
 from typing import Any
 
 from .. import robot_runtime as rt
-from ..learning.algorithms import algorithm_record, check_algorithm
+from ..learning import run_identity
 from ..learning.qtable import (
     MAGIC,
     MAX_TABLE_BYTES,
     RECORD_KEYS,
     QTable,
     backup_path,
-    check_compatible,
-    sensor_signature,
     with_journal,
 )
+from ..learning.run_identity import RunIdentity, algorithm_record
 from ..learning.table_journal import journal_path
-from ..store.config import Config, load_config, state_fields
+from ..store.config import Config, load_config
 from ..store.errors import FileError, QTableError, located
 from ..store.files import atomic_write, check_path, read_bytes
 from ..store.keyword import KeywordLayout
@@ -109,7 +109,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"wrote {out}: {len(table)} states, {table.meta.get('episodes', 0)} episodes")
         return 0
     cfg = load_config(args.config, world=args.world)
-    check_configuration(table, cfg, args.qtable)
+    run_identity.check(table, RunIdentity.of_config(cfg, args.world), "export", args.qtable)
     doc = policy_document(table, cfg, episode=args.episode, source=args.qtable)
     if args.world is not None:
         doc["world"] = str(args.world)
@@ -123,18 +123,6 @@ def run(args: argparse.Namespace) -> int:
         f"{doc['episodes']} episodes, {out.stat().st_size:,} bytes"
     )
     return 0
-
-
-def check_configuration(table: QTable, cfg: Config, source: str) -> None:
-    """Refuse to export ``table`` with a configuration it was not learned with, as
-    ``eval`` refuses to score it (:func:`~koolio_pymunk.learning.qtable.check_compatible`:
-    its keyword layout and sensors, naming the shipped profile that made it), and as
-    ``train`` refuses to continue it with another learning algorithm: the policy's
-    learner and rewards come from the configuration, and the robot goes on learning with
-    them."""
-    layout = KeywordLayout(tuple(state_fields(cfg.sensors)))
-    check_compatible(table, layout, sensor_signature(cfg), source)
-    check_algorithm(table, cfg.learner, source, "give export the --config it was learned with")
 
 
 def check_replaceable(out: Path, kind: str) -> None:
@@ -257,6 +245,9 @@ def policy_document(
     for key in RECORD_KEYS:  # what for and in which world, when not the arena's default
         if isinstance(table.meta.get(key), str):
             doc[key] = table.meta[key]
+    for key in ("run_id", "provenance"):  # where it came from (the runtime keeps both)
+        if key in table.meta:
+            doc[key] = table.meta[key]
     doc.update(rt.rows_json(table.rows, lay.action_bits))
     try:
         rt.validate_document(doc, source)
@@ -265,7 +256,7 @@ def policy_document(
     return doc
 
 
-#: What a policy needs of a table's sensor signature (``training.sensor_signature``).
+#: What a policy needs of a table's sensor signature (``run_identity.sensor_signature``).
 _SIGNATURE_LISTS = (
     "sonar_sensors_deg",
     "camera_sensors_deg",
@@ -323,6 +314,10 @@ def table_from_policy(policy: rt.Policy) -> QTable:
     for key in RECORD_KEYS:
         if isinstance(policy.extra.get(key), str):
             meta[key] = policy.extra[key]
+    if isinstance(policy.extra.get("provenance"), dict):
+        meta["provenance"] = policy.extra["provenance"]
+    if isinstance(policy.extra.get("run_id"), str):
+        meta["run_id"] = policy.extra["run_id"]
     if policy.algorithm != "q" or policy.no_undo:  # the robot's Dyna-Q model stays there
         params = {k: policy.learner[k] for k in rt.ALGORITHMS[policy.algorithm]}
         rule = {"no_undo": True} if policy.no_undo else {}
@@ -334,7 +329,7 @@ def table_from_policy(policy: rt.Policy) -> QTable:
 def load_any_table(path: str | Path) -> QTable:
     """Read a ``.qtable`` file or a koolio-policy file; QTableError (one line) if bad.
 
-    The caller checks the layout and sensors with :func:`qtable.check_compatible`.
+    The caller checks what it is for (:func:`~koolio_pymunk.learning.run_identity.check`).
     """
     p = check_path(path, "--qtable")
     try:

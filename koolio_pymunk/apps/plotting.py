@@ -43,7 +43,15 @@ from pathlib import Path
 
 import numpy as np
 
-from ..store.episode_log import MAX_LOG_BYTES, ascii_float, ascii_int, csv_fields, split_log
+from ..store.episode_log import (
+    MAX_LOG_BYTES,
+    ascii_float,
+    ascii_int,
+    csv_fields,
+    header_index,
+    log_run_id,
+    split_log,
+)
 from ..store.errors import KoolioError, located
 from ..store.files import atomic_write, read_text
 
@@ -143,7 +151,9 @@ def read_log(path: str | Path) -> Log:
     lines, torn = split_log(text)
     if torn and len(lines) > 1:
         lines = lines[:-1]
-    fieldnames = csv_fields(source, 1, lines[0]) if lines else []
+    log_run_id(source, lines)  # a run line first (checked), then the header
+    h = header_index(lines)
+    fieldnames = csv_fields(source, h + 1, lines[h]) if len(lines) > h else []
     missing = [c for c in REQUIRED if c not in fieldnames]
     if missing:
         raise KoolioError(
@@ -154,7 +164,7 @@ def read_log(path: str | Path) -> Log:
     skipped = 0
     steps_done: list[int] = []
     taken = 0
-    for line, text_line in enumerate(lines[1:], start=2):
+    for line, text_line in enumerate(lines[h + 1 :], start=h + 2):
         if not text_line.strip():
             continue
         row = dict(zip(fieldnames, csv_fields(source, line, text_line)))

@@ -43,7 +43,11 @@ from one checkpoint to the next);
 ``competence_episode`` is the first checkpoint whose greedy goal rate reaches
 ``competence`` (empty: not reached) and ``competence_seconds`` the training time until
 then; ``train_*`` summarise the training episodes themselves; ``table_sha256`` identifies
-the final Q-table.
+what the final Q-table learned
+(:func:`~koolio_pymunk.learning.run_identity.learned_digest`: its values and identity,
+not its provenance, so the same run on another machine or checkout has the same one).
+``run.json`` holds the task and its provenance (versions, commit, command line:
+:mod:`koolio_pymunk.store.provenance`).
 
 **Checkpoints.** A run's greedy evaluations are the periodic checks of ``koolio-pm train
 --eval-every K --eval-episodes M`` (:class:`~koolio_pymunk.learning.evaluation.PeriodicCheck`,
@@ -96,6 +100,7 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
+from ..store import provenance
 from ..store.errors import ConfigError, KoolioError, located, shown
 from ..store.interrupts import exit_status, terminate_as_interrupt
 
@@ -503,6 +508,7 @@ def plan(spec: SweepSpec) -> list[dict[str, Any]]:
                         "config_id": config_id,
                         "run_id": f"{config_id}/seed{seed}",
                         "label": label,
+                        "command": provenance.COMMAND,
                         "params": {
                             **{k: v for k, v in variant.items() if k != "name"},
                             **combo,
@@ -540,12 +546,14 @@ def run_one(task: dict[str, Any]) -> dict[str, Any]:
     """
     from ..learning.evaluation import evaluate
     from ..learning.qtable import QTableStore
+    from ..learning.run_identity import learned_digest
     from ..learning.training import train
     from ..store.config import config_from_dict
     from ..store.files import read_bytes
     from ..store.worlds import world_name
     from ..task.env import KoolioEnv
 
+    provenance.COMMAND = task.get("command")  # the sweep's, whichever process runs it
     cfg = config_from_dict(task["config"], task["run_id"])
     env = KoolioEnv(arena=task["arena_obj"], config=cfg, goal=task["goal"])
     if task.get("world") is not None:  # its realism is in cfg; the table records its name
@@ -588,6 +596,7 @@ def run_one(task: dict[str, Any]) -> dict[str, Any]:
             if competence is None and ev.goal_rate >= float(task["competence"]):
                 competence = (done, train_seconds)
         table_bytes = read_bytes(store.path)
+        digest = learned_digest(res.table)
         log_bytes = read_bytes(log)
     final = checkpoints[-1]
     n = max(1, len(results))
@@ -613,7 +622,7 @@ def run_one(task: dict[str, Any]) -> dict[str, Any]:
         "train_mean_bumps": sum(r.bumps for r in results) / n,
         "states": len(res.table),
         "train_seconds": round(train_seconds, 3),
-        "table_sha256": hashlib.sha256(table_bytes).hexdigest()[:16],
+        "table_sha256": digest,
     }
     for key, value in task["params"].items():
         row[key] = _fmt(value)
@@ -914,7 +923,8 @@ def _write_run(folder: Path, task: dict[str, Any], result: dict[str, Any]) -> No
 
     for name, data in result["files"].items():
         atomic_write(folder / name, data)
-    info = {k: v for k, v in task.items() if k not in ("arena_obj", "config")}
+    info = {k: v for k, v in task.items() if k not in ("arena_obj", "config", "command")}
+    info["provenance"] = provenance.of_run(task["config"], task.get("command"))
     atomic_write(folder / "run.json", json.dumps(info, indent=2, default=str).encode())
     atomic_write(folder / "result.json", json.dumps(result["row"], indent=2).encode())
 

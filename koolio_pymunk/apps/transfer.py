@@ -66,10 +66,10 @@ from typing import Any
 import numpy as np
 
 from .. import robot_runtime as rt
-from ..learning.algorithms import check_rule
+from ..learning import run_identity
 from ..learning.episodes import EVAL_STREAM, ROBOT_STREAM, Episodes
 from ..learning.evaluation import evaluate
-from ..learning.qtable import QTable, QTableStore, check_compatible, sensor_signature
+from ..learning.qtable import QTable, QTableStore
 from ..learning.training import train
 from ..store.config import Config, apply_world
 from ..store.errors import KoolioError, QTableError
@@ -404,10 +404,7 @@ def obtain_table(
     env = make_env(cfg, world)
     given = cfg.table_file(source, seed)
     if given is not None:
-        table = load_any_table(given)
-        check_compatible(table, env.layout, sensor_signature(env.config), given)
-        check_rule(table, env.config.learner, given, "give transfer its --config")
-        return table, given, 0.0
+        return load_any_table(given), given, 0.0  # checked by preflight
     name = f"{source}.qtable"
     report = None if say is None else (lambda line: say(f"training: {line}"))
     result = train(
@@ -558,7 +555,8 @@ def check_output(out: Path) -> None:
 
 def preflight(cfg: TransferConfig, out: Path) -> None:
     """Every input checked before anything is written: flags, worlds, goal, the tables to
-    load (their layout and sensors), the output folder."""
+    load (:func:`~koolio_pymunk.learning.run_identity.check`, purpose ``transfer``), the
+    output folder."""
     cfg.validate()
     env = make_env(cfg, None)
     for world, flag in ((cfg.world, "--world"), (cfg.dr_world, "--dr-world")):
@@ -567,10 +565,9 @@ def preflight(cfg: TransferConfig, out: Path) -> None:
     for seed in cfg.seeds:
         for source in SOURCES:
             given = cfg.table_file(source, seed)
-            if given is not None:
-                table = load_any_table(given)
-                check_compatible(table, env.layout, sensor_signature(env.config), given)
-                check_rule(table, env.config.learner, given, "give transfer its --config")
+            if given is not None:  # checked for the run that would have trained it
+                trained_in = make_env(cfg, None if source == "ideal" else cfg.dr_world)
+                run_identity.check(load_any_table(given), trained_in, "transfer", given)
     check_output(out)
 
 

@@ -59,10 +59,10 @@ from ..store.errors import KoolioError, QTableError, located
 from ..store.files import atomic_write, check_path, file_error, read_text
 from ..store.locks import FileLock
 from ..task.env import KoolioEnv
-from ..world.arena import arena_record
+from . import run_identity
 from .episodes import EVAL_STREAM, EpisodeResult
 from .qlearning import QLearner
-from .qtable import QTable, QTableStore, sensor_signature
+from .qtable import QTable, QTableStore
 
 #: Columns of the evaluations file (module doc).
 EVALS_FIELDS = (
@@ -196,39 +196,6 @@ def best_path(table: str | Path) -> Path:
     p = Path(table)
     stem = p.stem if p.suffix == ".qtable" else p.name
     return p.with_name(stem + ".best.qtable")
-
-
-def is_best_table(path: str | Path, table: QTable) -> bool:
-    """Is ``table``, read from ``path``, a kept best table: named as :func:`best_path`
-    names one (``*.best.qtable``) and recording its check (``best`` in its header)? Both:
-    a table started from a best one (``--init-qtable``) keeps the record until its first
-    save, under its own name; a table merely named so has no record.
-
-    >>> from koolio_pymunk.store.keyword import KeywordLayout
-    >>> t = QTable(KeywordLayout((("A", 3),)), {"best": {"episode": 40}})
-    >>> is_best_table("runs/t.best.qtable", t), is_best_table("runs/new.qtable", t)
-    (True, False)
-    """
-    return Path(path).name.endswith(".best.qtable") and isinstance(table.meta.get("best"), dict)
-
-
-def check_not_best(path: str | Path, table: QTable) -> None:
-    """Refuse to train a kept best table in place (``train --qtable X.best.qtable``, ``view
-    --learn``): its next save would rotate the best table into its backup and train it
-    away. One line naming the way: a new table started from it. Reading a best table
-    (``eval``, ``export``, ``view --greedy``, ``transfer``, ``--init-qtable``) is fine."""
-    if not is_best_table(path, table):
-        return
-    episode = table.meta["best"].get("episode", "?")
-    raise KoolioError(
-        located(
-            str(path),
-            "",
-            f"the best table kept by train --eval-every (its check at episode {episode}): "
-            "training it would change it in place; start a new table from it: "
-            f"koolio-pm train --init-qtable {path} --qtable NEW.qtable",
-        )
-    )
 
 
 def evals_path(log: str | Path | None, table: str | Path) -> Path:
@@ -374,7 +341,7 @@ class PeriodicCheck:
     @classmethod
     def open(
         cls,
-        env: KoolioEnv,
+        run: run_identity.RunIdentity,
         store: QTableStore,
         log_path: str | Path | None,
         every: int,
@@ -383,7 +350,7 @@ class PeriodicCheck:
         purpose: str = "koolio-pm train",
     ) -> PeriodicCheck:
         """Check and lock the evaluations file and the best table of ``store``'s run
-        (``log_path``: its log) before anything is written. A new table (no file, no
+        ``run`` (``log_path``: its log) before anything is written. A new table (no file, no
         backup) refuses an evaluations file with rows or a best table: they belong to
         another run."""
         if every < 1:
@@ -415,9 +382,12 @@ class PeriodicCheck:
                         "move it away",
                     )
                 )
-            cfg = env.config
+            own = store.peek()  # the run's table: the best one must be of its run
+            rid = own.meta.get("run_id") if own is not None else None
+            source = str(best.path)
             table = best.load(
-                env.layout, sensor_signature(cfg), cfg.learner.q_init, arena_record(env.arena)
+                lambda: run_identity.new_table(run),
+                lambda t: run_identity.check(t, run, "keep", source, best.warn, run_id=rid),
             )
             kept = None if best.fresh else best_record(table, str(best.path))
         except BaseException:

@@ -28,14 +28,12 @@ Reading checks everything, checksum first and then every header field and row (a
 with a valid checksum but ``episodes: -5`` or a key beyond its layout is refused with a
 one-line :class:`~koolio_pymunk.store.errors.QTableError` naming the item).
 
-**What a table records of its run** (:func:`check_record`). ``goal`` is recorded only when
-the run's goal is not the arena's active goal (``random``, or another door), ``world`` only
-when the run was not in the ideal world (a profile name such as ``koolio-real``, or a world
-file's name; from ``--world`` or from a configuration whose realism is on alike:
-:mod:`koolio_pymunk.store.worlds`): an absent key means the default, so a default run
-writes the bytes of a table made before these keys existed. A run that would continue a
-table trained for another goal or in another world is refused (:func:`check_record`);
-``eval`` names both.
+**What a table records of its run**: the run identity and its provenance
+(:mod:`koolio_pymunk.learning.run_identity`, which makes, reads and checks them). ``goal``
+is recorded only when the run's goal is not the arena's active goal (``random``, or
+another door), ``world`` only when the run was not in the ideal world: an absent key means
+the default. ``run_id`` and ``provenance`` (versions, commit, configuration, command line)
+are written once, when the table is made; tables made before them load without them.
 
 A table learned with an algorithm other than one-step Q records it in the header
 (``algorithm``: its name and parameters) and may carry data sections after the values,
@@ -50,13 +48,12 @@ the backup, so a crash at any moment leaves a loadable table. A torn table (chec
 mismatch) falls back to the backup with a warning; an unreadable one (permissions, I/O
 error) is refused, since its backup is one episode behind and resuming from it would
 repeat episode numbers for ever. The store holds the table's lock
-(:mod:`koolio_pymunk.store.locks`) from :meth:`QTableStore.open` to :meth:`QTableStore.close`.
+(:mod:`koolio_pymunk.store.locks`) from :meth:`QTableStore.load` to :meth:`QTableStore.close`.
 """
 
 from __future__ import annotations
 
 import contextlib
-import dataclasses
 import itertools
 import json
 import os
@@ -64,6 +61,7 @@ import re
 import struct
 import sys
 import zlib
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -71,8 +69,7 @@ from typing import Any
 import numpy as np
 
 from ..robot_runtime import MAX_Q, is_number, nonfinite_item
-from ..store.config import Config, MemoryConfig, load_config, profile_names, state_fields
-from ..store.errors import FileError, KoolioError, QTableError, located, shown
+from ..store.errors import FileError, QTableError, located, shown
 from ..store.files import (
     atomic_link,
     atomic_write,
@@ -252,6 +249,12 @@ def _is_int(v: Any) -> bool:
     return isinstance(v, int) and not isinstance(v, bool)
 
 
+#: Header keys of what a table records of its run besides the arena, the sensors and the
+#: algorithm (only when not the defaults; :mod:`~koolio_pymunk.learning.run_identity`).
+RECORD_KEYS = ("goal", "world")
+_RUN_ID = re.compile(r"[0-9a-f]{16}")
+
+
 def check_header(header: Any, source: str) -> tuple[KeywordLayout, float]:
     """Check every field of a table file's JSON header; pops ``format``, ``layout`` and
     ``q_init`` (the rest is the table's ``meta``). Returns the layout and ``q_init``."""
@@ -286,6 +289,11 @@ def check_header(header: Any, source: str) -> tuple[KeywordLayout, float]:
         value = header.get(key)
         if value is not None and not (isinstance(value, str) and value):
             raise bad(key, f"must be a non-empty string, got {shown(value)}")
+    run_id = header.get("run_id")
+    if run_id is not None and not (isinstance(run_id, str) and _RUN_ID.fullmatch(run_id)):
+        raise bad("run_id", f"must be 16 hexadecimal digits, got {shown(run_id)}")
+    if not isinstance(header.get("provenance", {}), dict):
+        raise bad("provenance", f"must be a mapping, got {shown(header['provenance'])}")
     item = nonfinite_item(header)
     if item is not None:  # 1e400 reads as infinity, which the next save writes as Infinity
         raise bad(item, "not a finite number (the table could not be saved again)")
@@ -394,7 +402,8 @@ class QTableStore:
         self.journal = table_journal.journal_path(self.path)
         self.fsync = fsync
         """``episode`` or ``second`` (class doc)."""
-        self._warn = warn or (lambda msg: print(f"warning: {msg}", file=sys.stderr))
+        self.warn = warn or (lambda msg: print(f"warning: {msg}", file=sys.stderr))
+        """Where the store's warnings go (a torn table, a table learned elsewhere)."""
         self._last: bytes | None = None
         """The bytes of the table file as last read or written (its snapshot)."""
         self._written: tuple[int, int, int, int] | None = None
@@ -424,17 +433,12 @@ class QTableStore:
             remove_stale_temps(p, owned=True)
 
     def load(
-        self,
-        layout: KeywordLayout,
-        sensors: dict[str, Any],
-        q_init: float,
-        arena: dict[str, str] | None = None,
-        record: dict[str, str] | None = None,
+        self, new: Callable[[], QTable], check: Callable[[QTable], object] | None = None
     ) -> QTable:
-        """Lock and read the table, or make a new empty one (``fresh``) without writing.
-        ``record`` is what a new table records of its run (``goal``, ``world``: module
-        doc); an existing one made for another is refused (:func:`check_record`). On any
-        error the lock is released again."""
+        """Lock and read the table, judged by ``check`` (which raises to refuse it: a run's
+        :func:`~koolio_pymunk.learning.run_identity.check`), or make a new empty one,
+        ``new()``, without writing it (``fresh``). On any error the lock is released
+        again."""
         self.lock()
         try:
             for later in (self.backup, self.journal):  # written later: refused now
@@ -442,14 +446,9 @@ class QTableStore:
             table = self._load_existing()
             self.fresh = table is None
             if table is None:
-                meta: dict[str, Any] = {"sensors": sensors, "episodes": 0}
-                if arena is not None:
-                    meta["arena"] = dict(arena)
-                meta.update(record or {})
-                return QTable(layout, meta, q_init)
-            check_compatible(table, layout, sensors, str(self.path), arena, self._warn)
-            if record is not None:
-                check_record(table, record, str(self.path))
+                return new()
+            if check is not None:
+                check(table)
         except BaseException:
             self.close()
             raise
@@ -460,13 +459,13 @@ class QTableStore:
         without the lock and without writing; None when there is none yet. A reader
         (``eval``) or a check before the lock is taken. Warns of a fallback to the
         backup only with ``warn``; an unusable table raises as in :meth:`load`."""
-        saved, last, written = self._warn, self._last, self._written
+        saved, last, written = self.warn, self._last, self._written
         if not warn:
-            self._warn = lambda msg: None
+            self.warn = lambda msg: None
         try:
             return self._load_existing()
         finally:
-            self._warn, self._last, self._written = saved, last, written
+            self.warn, self._last, self._written = saved, last, written
 
     def exists(self) -> bool:
         """True when the table file or its backup exists (a run would resume it)."""
@@ -599,7 +598,7 @@ class QTableStore:
             except QTableError as exc:
                 main_err = exc
             else:
-                with_journal(table, data, self.journal, self._warn)
+                with_journal(table, data, self.journal, self.warn)
                 return table
         if self.backup.exists():
             try:
@@ -613,7 +612,7 @@ class QTableStore:
                     located(str(self.path), "", f"missing, and its backup is unusable: {why}")
                 ) from None
             why = main_err if main_err is not None else f"{self.path}: missing"
-            self._warn(f"{why}; using the backup {self.backup}")
+            self.warn(f"{why}; using the backup {self.backup}")
             self._last, self._written = data, None  # the file does not hold _last
             return table
         if main_err is not None:
@@ -679,173 +678,6 @@ def load_qtable(path: str | Path) -> QTable:
         raise QTableError(str(exc)) from None
 
 
-_warned: set[tuple[str, str, str]] = set()
-
-
-def check_compatible(
-    table: QTable,
-    layout: KeywordLayout,
-    sensors: dict[str, Any],
-    source: str,
-    arena: dict[str, str] | None = None,
-    warn=None,
-) -> None:
-    """Refuse a table made for another keyword layout or sensor configuration; warn (once
-    per process) when it was learned in another arena than ``arena`` (a record of
-    :func:`koolio_pymunk.world.arena.arena_record`): it still loads, e.g. in an edited arena."""
-    if table.layout != layout:
-        raise QTableError(
-            located(
-                source,
-                "layout",
-                f"table made for {_fmt_layout(table.layout)}, this run uses "
-                f"{_fmt_layout(layout)}{_profile_hint(table)}",
-            )
-        )
-    theirs = table.meta.get("sensors", {})
-    if not isinstance(theirs, dict):
-        raise QTableError(located(source, "sensors", f"not a mapping: {shown(theirs)}"))
-    for key in sorted(set(theirs) | set(sensors), key=str):
-        if theirs.get(key) != sensors.get(key):
-            raise QTableError(
-                located(
-                    source,
-                    f"sensors.{key}",
-                    f"table made for {_recorded(theirs, key)}, "
-                    f"this run uses {_recorded(sensors, key)}{_profile_hint(table)}",
-                )
-            )
-    learned = table.meta.get("arena")
-    if arena is None or not isinstance(learned, dict) or learned == arena:
-        return
-    key = (source, json.dumps(learned, sort_keys=True), json.dumps(arena, sort_keys=True))
-    if key in _warned:
-        return
-    _warned.add(key)
-    message = (
-        f"{source}: learned in arena {learned.get('name')!r} (content "
-        f"{learned.get('sha256')}), used in arena {arena.get('name')!r} (content "
-        f"{arena.get('sha256')}); it loads (same sensors), but its policy was learned elsewhere"
-    )
-    (warn or (lambda msg: print(f"warning: {msg}", file=sys.stderr)))(message)
-
-
-#: Header keys of what a table records of its run besides the arena (module doc).
-RECORD_KEYS = ("goal", "world")
-
-
-def describe_goal(meta: dict[str, Any], default: str | None = None) -> str:
-    """The goal a table (or a run's record) was trained for, for a message; ``default``
-    is the arena's active goal, when known.
-
-    >>> describe_goal({}), describe_goal({}, "311"), describe_goal({"goal": "random"})
-    ("the arena's active goal", 'goal 311', 'a random goal per episode')
-    """
-    goal = meta.get("goal")
-    if goal is None:
-        return "the arena's active goal" if default is None else f"goal {default}"
-    return "a random goal per episode" if goal == "random" else f"goal {goal}"
-
-
-def describe_world(meta: dict[str, Any]) -> str:
-    """The world a table was trained in, for a message.
-
-    >>> describe_world({}), describe_world({"world": "koolio-real"})
-    ('the ideal world', 'world koolio-real')
-    """
-    world = meta.get("world")
-    return "the ideal world" if world is None else f"world {world}"
-
-
-def check_record(
-    table: QTable,
-    record: dict[str, str],
-    source: str,
-    default_goal: str | None = None,
-    table_goal: str | None = None,
-) -> None:
-    """Refuse to continue a table trained for another goal or in another world than the
-    run's ``record`` (``goal``, ``world``; absent: the defaults, ``default_goal`` being the
-    run's arena's active goal, ``table_goal`` that of the arena the table was learned in,
-    when known). One line, with what to do instead: the same flag as the table's run, or
-    a new table started from it.
-
-    >>> t = QTable(KeywordLayout((("A", 3),)))
-    >>> check_record(t, {}, "t.qtable")
-    >>> check_record(t, {"goal": "random"}, "t.qtable", "311", "311")  # doctest: +ELLIPSIS
-    Traceback (most recent call last):
-    ...
-    koolio_pymunk.store.errors.QTableError: t.qtable: goal: trained for goal 311, this run ...
-    """
-    for key, flag in (("goal", "--goal"), ("world", "--world")):
-        theirs, mine = table.meta.get(key), record.get(key)
-        if theirs == mine:
-            continue
-        if key == "goal":
-            was, now = describe_goal(table.meta, table_goal), describe_goal(record, default_goal)
-        else:
-            was, now = describe_world(table.meta), describe_world(record)
-        if key == "world":
-            same = _same_world(theirs)
-        else:
-            same = f"{flag} {theirs}" if theirs is not None else f"no {flag}"
-        raise QTableError(
-            located(
-                source,
-                key,
-                f"trained for {was}, this run asks for {now}: run with {same} to continue "
-                f"it, or give a new --qtable (with --init-qtable {source} to start from it)",
-            )
-        )
-
-
-def _same_world(world: str | None) -> str:
-    """How to run in the world a table records again (``--world`` or ``--config``, which
-    name it alike: :mod:`koolio_pymunk.store.worlds`).
-
-    >>> _same_world(None), _same_world("koolio-real")
-    ('no --world and no realism in --config', '--world koolio-real (or --config koolio-real)')
-    >>> _same_world("realism-0123abcd")
-    'a --config (and --world) with the same realism section'
-    """
-    if world is None:
-        return "no --world and no realism in --config"
-    if re.fullmatch(r"realism-[0-9a-f]{8}", world):
-        return "a --config (and --world) with the same realism section"
-    return f"--world {world} (or --config {world})"
-
-
-def _profile_hint(table: QTable) -> str:
-    """`` (made with --config NAME: add it)`` when ``table``'s sensors match a shipped
-    profile's (or the default configuration's), else ``""``."""
-    theirs = table.meta.get("sensors")
-    for name in (None, *profile_names()):
-        try:
-            cfg = load_config(name)
-        except KoolioError:  # an unreadable profile: no hint from it
-            continue
-        fields = tuple(state_fields(cfg.sensors))
-        if sensor_signature(cfg) == theirs and KeywordLayout(fields) == table.layout:
-            if name is None:
-                return " (it was made with the default configuration: leave out --config)"
-            return f" (it was made with the shipped profile {name!r}: add --config {name})"
-    return ""
-
-
-def _recorded(sensors: dict[str, Any], key: str) -> str:
-    """The value of ``key`` in a sensor signature, for a message (a missing key is not
-    ``None``: that could be a value)."""
-    return shown(sensors[key], 80) if key in sensors else "none (not recorded)"
-
-
-def _fmt_layout(layout: KeywordLayout) -> str:
-    return (
-        f"{layout.total_bits}-bit keyword ["
-        + ", ".join(f"{n}:{lv}" for n, lv in layout.fields)
-        + "]"
-    )
-
-
 def human_bytes(n: float) -> str:
     """``1.5 KiB``-style size with one decimal (binary units, as the paper).
 
@@ -857,41 +689,3 @@ def human_bytes(n: float) -> str:
             return f"{n:.1f} {unit}" if unit != "B" else f"{int(n)} B"
         n /= 1024
     raise AssertionError("unreachable")
-
-
-def sensor_signature(cfg: Config) -> dict[str, Any]:
-    """What a Q-table depends on: the sensor layout (noise settings excluded)."""
-    s = cfg.sensors
-    so, ca = s.sonar, s.camera
-    model = {"sonar_model": "cone"} if s.backend == "cone" else {}  # sub-arcs: no key
-    return (
-        model
-        | {
-            "sonar_sensors_deg": list(so.sonar_sensors_deg),
-            "sonar_arc_deg": so.sonar_arc_deg,
-            "sub_arcs": so.sub_arcs,
-            "sonar_max_range": so.max_range,
-            "sonar_groups": [list(g) for g in so.groups],
-            "sonar_thresholds": list(so.thresholds),
-            "camera_sensors_deg": list(ca.camera_sensors_deg),
-            "camera_arc_deg": ca.camera_arc_deg,
-            "max_camera_view": ca.max_camera_view,
-            "camera_thresholds": list(ca.thresholds),
-            "compass_in_state": s.compass.in_state,
-        }
-        | _memory_signature(s.memory, cfg.actions.rotate_action_arc_deg)
-    )
-
-
-def _memory_signature(mem: MemoryConfig, turn_deg: float) -> dict[str, Any]:
-    """The memory's part of a sensor signature: nothing when it is off (the tables of
-    memoryless runs stay as they were); with ``goal_bearing`` also the rotation's arc
-    ``turn_deg`` it turns by."""
-    if not mem.on:
-        return {}
-    fields = dataclasses.asdict(mem)
-    if mem.goal_bearing:
-        fields["turn_deg"] = turn_deg
-    else:  # a field added later: tables without it keep their bytes
-        del fields["goal_bearing"]
-    return {"memory": fields}

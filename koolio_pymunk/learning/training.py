@@ -25,8 +25,6 @@ written with ``repr`` so that they round-trip exactly.
 
 from __future__ import annotations
 
-import functools
-import os
 import sys
 import time
 from collections import deque
@@ -34,24 +32,21 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..store.episode_log import LogWriter, RowRules, check_in_step, check_log_path, log_rows
+from ..store.episode_log import LogWriter, check_in_step, check_log_path, log_rows
 from ..store.errors import KoolioError, located
 from ..store.interrupts import SafeInterrupt
 from ..store.locks import check_lock_file
-from ..store.worlds import world_label
 from ..task.env import KoolioEnv
-from ..world.arena import arena_path, arena_record, load_arena
-from .algorithms import attach, make_learner
+from . import run_identity
+from .algorithms import make_learner
 from .episodes import INTERRUPTED, TRAIN_STREAM, EpisodeResult, Robots
-from .evaluation import DEFAULT_EVAL_EPISODES, Check, PeriodicCheck, check_not_best
+from .evaluation import DEFAULT_EVAL_EPISODES, Check, PeriodicCheck
 from .qtable import (
     QTable,
     QTableStore,
-    check_compatible,
-    check_record,
     load_qtable,
-    sensor_signature,
 )
+from .run_identity import RunIdentity
 
 #: With ``--fsync second``: the longest time between two durable snapshots of the table
 #: (what a power loss can lose), seconds.
@@ -137,62 +132,6 @@ def clock_time(seconds: float | None) -> str:
     return f"{h}:{m:02d}:{s % 60:02d}" if h else f"{m}:{s % 60:02d}"
 
 
-def run_record(env: KoolioEnv) -> dict[str, str]:
-    """What a table records of a run in ``env`` besides the arena
-    (:func:`~koolio_pymunk.learning.qtable.check_record`): ``goal`` when it is not the
-    arena file's active goal (``random`` or another door), ``world`` when it is not the
-    ideal one (:attr:`~koolio_pymunk.task.env.KoolioEnv.world_name`: from ``--world`` or
-    from a configuration whose realism is on). Empty for a default run, whose table bytes
-    therefore stay those of tables written before these keys existed."""
-    out: dict[str, str] = {}
-    goal = "random" if env.random_goal else env.goal_name
-    if goal != arena_goal(env):
-        out["goal"] = goal
-    world = world_label(env.world_name)
-    if world != "ideal":
-        out["world"] = world
-    return out
-
-
-def log_rules(env: KoolioEnv, table: QTable) -> RowRules:
-    """What the rows of ``table``'s log can hold in a run in ``env``
-    (:mod:`koolio_pymunk.store.episode_log`, "Another run's log"): rows ahead of the table
-    an epsilon of the run's schedule, every row the goal the table records (other than
-    ``random``: a table keeps its goal for life, :func:`check_record`)."""
-    goal = table.meta.get("goal")
-    fixed = goal if isinstance(goal, str) and goal != "random" else None
-    return RowRules(epsilon=env.config.learner.epsilon, goal=fixed)
-
-
-def arena_goal(env: KoolioEnv) -> str:
-    """The active goal of ``env``'s arena file (``--goal`` changes the env's).
-
-    The file is read once per version (its path, size and modification time): a
-    training run asks at every open and check, and parsing the hallway's YAML costs
-    more than a hundred of its episodes' saves."""
-    arena = env.arena
-    try:
-        st = os.stat(arena_path(arena.source))
-        return _file_goal(arena.source, env.config.robot.radius, st.st_mtime_ns, st.st_size)
-    except (KoolioError, OSError):  # an arena made in memory: its own active goal
-        return arena.active_goal
-
-
-def table_arena_goal(table: QTable, env: KoolioEnv) -> str | None:
-    """The active goal of the arena ``table`` was learned in, when that arena is ``env``'s
-    (the name and content it records are ``env``'s arena's): ``env``'s arena file's active
-    goal (:func:`arena_goal`). None when the table was learned in another arena or does
-    not say: a table records its goal only when it is not its arena's active one, so
-    ``env``'s would name the wrong goal (the room's 201 for a table of the hallway's 311)."""
-    return arena_goal(env) if table.meta.get("arena") == arena_record(env.arena) else None
-
-
-@functools.lru_cache(maxsize=16)
-def _file_goal(source: str, radius: float, mtime_ns: int, size: int) -> str:
-    """The active goal of the arena file ``source`` as it is at ``mtime_ns``/``size``."""
-    return load_arena(source, radius).active_goal
-
-
 class RunFiles:
     """A run's Q-table and log, locked, in step, and recorded the same way by every loop.
 
@@ -239,37 +178,36 @@ class RunFiles:
     @classmethod
     def open(
         cls,
-        env: KoolioEnv,
+        run: RunIdentity,
         store: QTableStore,
         log_path: str | Path | None,
         purpose: str = "koolio-pm",
+        seed: int | None = None,
     ) -> RunFiles:
-        """Lock and open ``store``'s table and the log at ``log_path`` for a run in
-        ``env`` (``None`` or ``""``: no log). The caller closes them (:meth:`close`).
+        """Lock and open ``store``'s table and the log at ``log_path`` for the run ``run``
+        (:meth:`RunIdentity.of_run <koolio_pymunk.learning.run_identity.RunIdentity.of_run>`;
+        ``None`` or ``""``: no log; ``seed``: the run's, recorded in a new table's run id).
+        The caller closes them (:meth:`close`).
 
         Everything that can be checked by reading is checked before the lock is taken
         (:meth:`check`), so a refused run leaves no file behind, not even a lock file.
         """
-        cfg = env.config
-        record = run_record(env)
+        source = str(store.path)
         try:
-            cls.check(env, store, log_path, record)
+            cls.check(run, store, log_path)
             table = store.load(
-                env.layout,
-                sensor_signature(cfg),
-                cfg.learner.q_init,
-                arena_record(env.arena),
-                record,
+                lambda: run_identity.new_table(run, seed),
+                lambda t: run_identity.check(t, run, "resume", source, store.warn),
             )
-            attach(table, cfg.learner, str(store.path))  # the run's learning algorithm
+            run_identity.stamp(table, run)  # the run's learner parameters
             log = LogWriter(
                 log_path,
                 int(table.meta.get("episodes", 0)),
                 store.fresh or store.created,  # made by this run (--init-qtable): a new log
                 store.path,
                 purpose,
-                extra_fields=tuple(env.randomizer.columns),
-                rules=log_rules(env, table),
+                extra_fields=run.log_columns,
+                rules=run_identity.log_rules(run, table),
             )
             try:
                 if store.fresh:
@@ -284,23 +222,21 @@ class RunFiles:
 
     @staticmethod
     def check(
-        env: KoolioEnv,
+        run: RunIdentity,
         store: QTableStore,
         log_path: str | Path | None,
-        record: dict[str, str] | None = None,
     ) -> QTable | None:
         """The checks of :meth:`open` that need no lock, by reading only: the log's path
-        and header, the table (the backup when torn) not a kept best table
-        (:func:`~koolio_pymunk.learning.evaluation.check_not_best`), made for this run's
-        sensors, goal, world (``record``: :func:`run_record`, computed when None) and
-        learning algorithm, a log that is not another run's (a new table's without rows;
-        :class:`~koolio_pymunk.store.episode_log.RowRules` otherwise). Returns the table a
-        run would resume (None: a new one)."""
+        and header, the table (the backup when torn) one this run may resume
+        (:func:`~koolio_pymunk.learning.run_identity.check`, purpose ``resume``), a log
+        that is not another run's (a new table's without rows; its run id, and
+        :class:`~koolio_pymunk.store.episode_log.RowRules`). Returns the table a run
+        would resume (None: a new one)."""
         logged = log_path is not None and str(log_path) != ""
         if not store.locked:  # in use by another: that, before a line about the table
             check_lock_file(store.path)
         if logged:
-            check_log_path(log_path, store.path, tuple(env.randomizer.columns))
+            check_log_path(log_path, store.path, run.log_columns)
         table = store.peek()
         if table is None:
             rows = log_rows(log_path) if logged else []
@@ -314,15 +250,10 @@ class RunFiles:
                     )
                 )
             return None
-        if not store.created:  # a table started from a best one keeps its header until saved
-            check_not_best(store.path, table)
-        check_compatible(table, env.layout, sensor_signature(env.config), str(store.path))
-        record = run_record(env) if record is None else record
-        check_record(table, record, str(store.path), arena_goal(env), table_arena_goal(table, env))
-        attach(table, env.config.learner, str(store.path))  # the same algorithm
+        run_identity.check(table, run, "resume", str(store.path), store.warn)
         if logged and not store.created:  # a table this run made has a new log (checked)
             episodes = int(table.meta.get("episodes", 0))
-            check_in_step(log_path, episodes, store.path, log_rules(env, table))
+            check_in_step(log_path, episodes, store.path, run_identity.log_rules(run, table))
         return table
 
     def finished(self, res: EpisodeResult, save: bool = False) -> None:
@@ -491,11 +422,12 @@ def train(
             )
         )
     store.fsync = fsync
+    run = RunIdentity.of_run(env)  # what the run's files are checked against
     checker = None
     if eval_every:
-        checker = PeriodicCheck.open(env, store, log_path, eval_every, eval_episodes, seed)
+        checker = PeriodicCheck.open(run, store, log_path, eval_every, eval_episodes, seed)
     try:
-        files = RunFiles.open(env, store, log_path, "koolio-pm train")
+        files = RunFiles.open(run, store, log_path, "koolio-pm train", seed)
     except BaseException:
         if checker is not None:
             checker.close()
@@ -503,7 +435,6 @@ def train(
     files.save_every = max(1, save_every if save_every is not None else robots)
     files.save_seconds = save_seconds
     table, first = files.table, files.first
-    table.meta.pop("best", None)  # a kept best table trained on is no longer its check's
     agents = [make_learner(table, cfg.learner, None, str(store.path)) for _ in range(n)]
     journal = discard_unfinished and n > 1
     loop = make_robots(env, agents, seed, TRAIN_STREAM, compiled=compiled, journal=journal)

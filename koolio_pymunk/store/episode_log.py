@@ -39,27 +39,31 @@ the log and the table can disagree after a stop:
   rows ahead, in their warning); one the table holds keeps its learning, and the warning
   says that its row is lost.
 
+**The run line.** The log of a table that has a run id
+(:mod:`koolio_pymunk.learning.run_identity`: every table made since version 0.2) starts
+with ``# koolio-pymunk run <id>`` (:data:`RUN_LINE`), then the header. CSV readers take it
+as a comment (``pandas.read_csv(path, comment="#")``); the robot's logs and the logs of
+earlier tables have none.
+
 **Another run's log** is refused in one line before any file is written, when it
 evidently does not belong to the table:
 
-* a new table (no table file, no backup) with a log that already holds rows;
+* a log whose run line names another run than the table's (or names one, beside a table
+  made before run ids);
+* a new table (no table file, no backup) with a log that already holds rows (a new
+  table's log without rows gets this run's first line and header);
 * a table that records a goal (``--goal`` other than the arena's active one, not
-  ``random``: :func:`~koolio_pymunk.learning.qtable.check_record` keeps it for the table's
-  whole life) and a row that names another goal;
-* a row the run would move as ahead of the table whose ``epsilon`` is no value of the
-  run's exploration schedule (``learner.epsilon``) at any episode number (one robot logs
-  the value of the episode's own number, many robots that of its start's number).
+  ``random``, kept for the table's whole life) and a row that names another goal;
+* for a log without a run line only: a row the run would move as ahead of the table
+  whose ``epsilon`` is no value of the run's exploration schedule (``learner.epsilon``)
+  at any episode number (one robot logs the value of the episode's own number, many
+  robots that of its start's number).
 
-Only the rows ahead are held to the schedule: they were written by the run that saved
-the table last, and resuming it with its configuration, as documented, writes the same
-values; rows the table holds may have been written under other learner parameters,
-which may change between runs (:func:`~koolio_pymunk.learning.algorithms.attach`). So a
-log of another run that is not ahead of the table (and has the same goal) is not
-detected: it is taken as the table's, with the warning that rows are missing if any
-are. The one legitimate case refused is a run resumed with another ``learner.epsilon``
-right after a stop that left rows ahead: the message names the way out (the
-configuration that wrote them, once). What a table records cannot say more without a
-change of the file formats (the seed and the schedule are not in the header).
+Without a run line, only the rows ahead are held to the schedule: they were written by
+the run that saved the table last, and resuming it with its configuration writes the same
+values; rows the table holds may have been written under other learner parameters. So a
+log of another run without a run line that is not ahead of the table (and has the same
+goal) is taken as the table's, with the warning that rows are missing if any are.
 
 **What a row may hold.** Every line of at most :data:`MAX_LOG_LINE` characters (longer
 ones are refused before the CSV reader sees them), the header's number of columns,
@@ -106,6 +110,12 @@ if TYPE_CHECKING:
 #: The log's columns are :data:`~koolio_pymunk.robot_runtime.LOG_FIELDS`: the robot writes
 #: the same log.
 HEADER = ",".join(LOG_FIELDS)
+#: The first line of the log of a table that has a run id
+#: (:mod:`koolio_pymunk.learning.run_identity`), before the header: ``# koolio-pymunk run
+#: <id>`` (module doc, "Another run's log"). CSV readers skip it as a comment
+#: (``pandas.read_csv(path, comment="#")``).
+RUN_LINE = "# koolio-pymunk run "
+_RUN_ID = re.compile(r"[0-9a-f]{16}")
 #: Largest log read back (a million episodes is about 40 MiB).
 MAX_LOG_BYTES = 1 << 30
 #: Longest line of a log, characters (a row is under 200 plus 30 per ``realism.*``
@@ -143,6 +153,42 @@ def ascii_float(text: str) -> float | None:
         return None
     value = float(text)
     return value if math.isfinite(value) else None
+
+
+def run_line(run_id: str) -> str:
+    """The line a log of run ``run_id`` starts with.
+
+    >>> run_line("0123456789abcdef")
+    '# koolio-pymunk run 0123456789abcdef'
+    """
+    return RUN_LINE + run_id
+
+
+def header_index(lines: list[str]) -> int:
+    """Where the header is among a log's ``lines``: 1 after a run line (any first line
+    starting with ``#``, checked by :func:`log_run_id`), else 0."""
+    return 1 if lines and lines[0].startswith("#") else 0
+
+
+def log_run_id(source: str, lines: list[str]) -> str | None:
+    """The run id a log's first line names (None: a log without one, as logs before run
+    ids and the robot's are); a first line starting with ``#`` that is not a run line is
+    refused in one line."""
+    if not header_index(lines):
+        return None
+    first = lines[0].rstrip("\r")
+    rid = first[len(RUN_LINE) :]
+    if not first.startswith(RUN_LINE) or not _RUN_ID.fullmatch(rid):
+        shown = first if len(first) <= 40 else first[:37] + "..."
+        raise KoolioError(
+            located(
+                source,
+                "line 1",
+                f"not a training log (its first line is {shown!r}: a log starts with its "
+                f"header or with {RUN_LINE!r} and a run id); nothing was written",
+            )
+        )
+    return rid
 
 
 def split_log(text: str) -> tuple[list[str], bool]:
@@ -273,8 +319,9 @@ def _read_only(folder: Path) -> bool:
 def _check_rows(p: Path, text: str) -> None:
     """Every complete row of the log text (module doc); a torn last row is not one."""
     lines, torn = split_log(text)
-    header = csv_fields(str(p), 1, lines[0])
-    for k, line in enumerate(lines[1:-1] if torn else lines[1:], start=2):
+    h = header_index(lines)
+    header = csv_fields(str(p), h + 1, lines[h])
+    for k, line in enumerate(lines[h + 1 : -1] if torn else lines[h + 1 :], start=h + 2):
         if line.strip():
             _row(p, k, line, header)
 
@@ -295,16 +342,19 @@ def _read(p: Path) -> str:
 def _check_header(p: Path, text: str, extra_fields: tuple[str, ...] | None = None) -> None:
     """A log's header: :data:`LOG_FIELDS`, then only ``realism.*`` columns; a writer's
     ``extra_fields`` must be exactly the log's extra columns."""
-    first = text.split("\n", 1)[0].rstrip("\r")
+    lines = text.split("\n", 2)
+    h = header_index(lines)
+    log_run_id(str(p), lines)
+    first = lines[h].rstrip("\r") if h < len(lines) else ""
     extra = first[len(HEADER) + 1 :].split(",") if first.startswith(HEADER + ",") else []
     if first != HEADER and (not extra or not all(c.startswith("realism.") for c in extra)):
         shown = first if len(first) <= 40 else first[:37] + "..."
         raise KoolioError(
             located(
                 str(p),
-                "line 1",
-                f"not a training log (its first line is {shown!r}, a log's is {HEADER!r}); "
-                "nothing was written",
+                f"line {h + 1}",
+                f"not a training log (its {'second' if h else 'first'} line is {shown!r}, a "
+                f"log's header is {HEADER!r}); nothing was written",
             )
         )
     if extra_fields is not None and tuple(extra) != tuple(extra_fields):
@@ -312,7 +362,7 @@ def _check_header(p: Path, text: str, extra_fields: tuple[str, ...] | None = Non
         raise KoolioError(
             located(
                 str(p),
-                "line 1",
+                f"line {h + 1}",
                 f"its extra columns ({', '.join(extra) or 'none'}) are not this run's "
                 f"({mine}): domain randomization differs; give another --log",
             )
@@ -330,10 +380,11 @@ def log_rows(path: str | Path) -> list[dict[str, str]]:
         return []
     _check_header(p, text)
     lines, torn = split_log(text)
-    header = csv_fields(str(p), 1, lines[0])
-    body = lines[1:-1] if torn else lines[1:]
+    h = header_index(lines)
+    header = csv_fields(str(p), h + 1, lines[h])
+    body = lines[h + 1 : -1] if torn else lines[h + 1 :]
     rows = []
-    for k, line in enumerate(body, start=2):
+    for k, line in enumerate(body, start=h + 2):
         if line.strip():
             rows.append(_row(p, k, line, header))
     return rows
@@ -362,6 +413,9 @@ class RowRules:
     """The run's exploration schedule: a row ahead of the table has one of its values."""
     goal: str | None = None
     """The goal every row names (a table that records one, other than ``random``)."""
+    run_id: str | None = None
+    """The table's run id: a log that names another is another run's, and a new log
+    starts with it (:func:`run_line`). None: a table made before run ids."""
 
 
 def schedule_gives(schedule: EpsilonSchedule, logged: str) -> bool:
@@ -419,6 +473,8 @@ class LogWriter:
         self._fh: io.TextIOBase | None = None
         self._warn = warn or (lambda msg: print(f"warning: {msg}", file=sys.stderr))
         self._lock: FileLock | None = None
+        self.run_id = rules.run_id if rules is not None else None
+        """The run id a new log starts with (None: none)."""
         self._later: list[str] = []
         """Warnings of missing rows, given with the first new row: they change no file, and
         a run that fails before it (at its first save) says only its error."""
@@ -450,12 +506,18 @@ class LogWriter:
             return
         _check_header(p, text, self.extra_fields)
         plan = _plan(p, text, episodes, fresh, table, rules)
+        h = header_index(plan.lines)
+        if fresh and log_run_id(str(p), plan.lines) != self.run_id:  # no rows (else refused)
+            atomic_write(p, b"")  # a new table's log: this run's first line and header
+            return
         if plan.header_only:  # the header without its line end
-            atomic_write(p, (plan.lines[0] + "\n").encode("utf-8"))
+            atomic_write(p, ("\n".join(plan.lines[: h + 1]) + "\n").encode("utf-8"))
         if plan.again or plan.torn is not None:
             kept = removed_path(p)
             removed = plan.lines[plan.keep : -1] + ([plan.torn] if plan.torn is not None else [])
-            _append_rows(kept, plan.lines[0], removed)  # first: a crash between loses nothing
+            # first: a crash between the two writes loses nothing (the rows of any run: a
+            # header and no run line)
+            _append_rows(kept, plan.lines[h], removed)
             atomic_write(p, ("\n".join(plan.lines[: plan.keep]) + "\n").encode("utf-8"))
             if plan.again:
                 self._warn(_moved(p, plan.again, kept, table, episodes))
@@ -491,6 +553,8 @@ class LogWriter:
                 self.path, "a", newline="", encoding="utf-8", opener=_APPEND
             )
             if os.fstat(self._fh.fileno()).st_size == 0:  # new or empty: the header first
+                if self.run_id is not None:
+                    self._fh.write(run_line(self.run_id) + "\n")
                 self._fh.write(header_line(self.extra_fields) + "\n")
         return self._fh
 
@@ -572,10 +636,12 @@ def _plan(
     does; a one-line :class:`KoolioError` when the log is another run's (module doc).
     Reads only."""
     lines = text.split("\n")
-    if len(lines) == 1:  # the header without its line end
-        return _Plan([lines[0], ""], 1, False, -1, 0, None, [], None, header_only=True)
+    h = header_index(lines)
+    _check_run(p, lines, rules, table)
+    if len(lines) == h + 1:  # the header without its line end
+        return _Plan([*lines, ""], h + 1, False, -1, 0, None, [], None, header_only=True)
     torn = lines[-1] if lines[-1] != "" else None
-    rows = sum(1 for ln in lines[1:-1] if ln.strip())
+    rows = sum(1 for ln in lines[h + 1 : -1] if ln.strip())
     if fresh and (rows or torn is not None):
         raise KoolioError(
             located(
@@ -587,7 +653,8 @@ def _plan(
         )
     cut, last = _cut_line(p, lines, episodes, rules, table)
     keep = len(lines) - 1 if cut is None else cut
-    if rules is not None and rules.epsilon is not None and cut is not None:
+    named = rules is not None and rules.run_id is not None and h == 1  # the same id: checked
+    if rules is not None and rules.epsilon is not None and cut is not None and not named:
         _check_ahead(p, lines, keep, episodes, rules.epsilon, table)
     again = lines[keep:-1]
     t = _torn_number(torn) if torn is not None else None
@@ -613,10 +680,29 @@ def check_in_step(
     if not text:
         return
     _check_header(p, text)
-    lines = text.split("\n")[1:-1]
-    if rules.goal is None and all((_torn_number(ln) or 0) < episodes for ln in lines):
+    lines = text.split("\n")
+    _check_run(p, lines, rules, table)
+    body = lines[header_index(lines) + 1 : -1]
+    if rules.goal is None and all((_torn_number(ln) or 0) < episodes for ln in body):
         return  # no row ahead (a pass without the CSV reader: a long log is read once more)
     _plan(p, text, episodes, False, table, rules)
+
+
+def _check_run(p: Path, lines: list[str], rules: RowRules | None, table: str | Path | None) -> None:
+    """A log that names a run id is the log of the table with that id only (module doc)."""
+    theirs = log_run_id(str(p), lines)
+    mine = rules.run_id if rules is not None else None
+    if theirs is None or theirs == mine:
+        return
+    what = f"run {mine}" if mine is not None else "a table made before run ids"
+    raise KoolioError(
+        located(
+            str(p),
+            "line 1",
+            f"the log of run {theirs}, and the Q-table {table or ''} is {what}: a log of "
+            "another run; give another --log",
+        )
+    )
 
 
 def _check_ahead(
@@ -629,7 +715,8 @@ def _check_ahead(
 ) -> None:
     """The complete rows ``lines[keep:-1]`` (ahead of the table) have epsilons the run's
     ``schedule`` gives (module doc)."""
-    header = csv_fields(str(p), 1, lines[0])
+    h = header_index(lines)
+    header = csv_fields(str(p), h + 1, lines[h])
     for k in range(keep, len(lines) - 1):
         if not lines[k].strip():
             continue
@@ -660,8 +747,9 @@ def _cut_line(
     last = -1
     cut = None
     goal = rules.goal if rules is not None else None
-    header = csv_fields(str(p), 1, lines[0])
-    for k in range(1, len(lines) - 1):
+    h = header_index(lines)
+    header = csv_fields(str(p), h + 1, lines[h])
+    for k in range(h + 1, len(lines) - 1):
         if not lines[k].strip() or (cut is not None and goal is None):
             continue
         row = _row(p, k + 1, lines[k], header)

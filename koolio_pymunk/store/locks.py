@@ -85,6 +85,8 @@ def lock_path(target: str | Path) -> Path:
     return target.with_name(target.name + ".lock")
 
 
+#: How a holder's note starts (``#process <pid> (<purpose>)``).
+NOTE_START = b"#process "
 #: Largest lock file taken as one (a note is ``#process <pid> (<purpose>)``).
 MAX_NOTE_BYTES = 4096
 #: Flags of the lock file's open: created if missing, never through a symbolic link,
@@ -222,21 +224,21 @@ def _check_opened(fd: int, target: Path, path: Path) -> None:
 
 
 def _check_note(fd: int, target: Path, path: Path) -> None:
-    """A lock file holds a holder's note (``#...``, at most :data:`MAX_NOTE_BYTES`) or
-    nothing."""
+    """A lock file holds a holder's note (``#process ...``, at most
+    :data:`MAX_NOTE_BYTES`) or nothing (a log's first line also starts with ``#``)."""
     size = os.fstat(fd).st_size
     if size == 0:
         return
     try:
-        head = os.pread(fd, 1, 0)
+        head = os.pread(fd, len(NOTE_START), 0)
     except OSError:
         head = b""
-    if size > MAX_NOTE_BYTES or head != b"#":
+    if size > MAX_NOTE_BYTES or head != NOTE_START:
         raise _refuse(
             target,
             path,
-            "holds other data than a lock note (its first byte is not '#' or it is "
-            f"over {MAX_NOTE_BYTES} bytes): move that file away",
+            "holds other data than a lock note (it does not start with '#process ' or it "
+            f"is over {MAX_NOTE_BYTES} bytes): move that file away",
         )
 
 

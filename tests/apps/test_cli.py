@@ -59,7 +59,8 @@ def test_train_then_eval_then_info(tmp_path) -> None:
     assert "configuration:" not in p.stdout  # behind --verbose
     assert "training goal rate" in p.stdout and "steps/s" in p.stdout
     assert q.exists() and Path(str(q) + ".bak").exists()
-    assert len(log.read_text().splitlines()) == 4
+    assert log.read_text().startswith("# koolio-pymunk run ")
+    assert len(log.read_text().splitlines()) == 5  # the run line, the header, 3 rows
     p = cli(
         "eval",
         "--arena",
@@ -331,9 +332,13 @@ def test_info_describes_the_tables_own_layout(tmp_path, capsys) -> None:
         "  not a table of the default configuration (no --config): layout: table made for "
         "35-bit keyword"
     )
-    assert lines[13].endswith("add --config paper-memory-qlambda)") and len(lines) == 14
+    assert lines[13].endswith("add --config paper-memory-qlambda)")
+    assert lines[14].startswith("  learned content ") and lines[15] == (
+        "  provenance: not recorded (a table made before tables recorded it)"
+    )
+    assert len(lines) == 16
     lines = info("--qtable", str(mem), "--config", "paper-memory-qlambda")
-    assert lines[5] == "  this configuration:" and len(lines) == 13  # its own: no remark
+    assert lines[5] == "  this configuration:" and len(lines) == 15  # its own: no remark
     lines = info("--qtable", str(plain), "--config", "paper-memory")
     assert lines[5:7] == ["  this configuration:", f"    states  {71_663_616:>16,}"]
     assert lines[9] == "Keyword (32 bits, Table 12):"

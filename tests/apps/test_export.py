@@ -11,13 +11,13 @@ from inputs import expect_error, open_table, table_file
 from koolio_pymunk import robot_runtime as rt
 from koolio_pymunk.apps import cli
 from koolio_pymunk.apps.export import load_any_table, policy_document, write_policy
+from koolio_pymunk.learning import run_identity
 from koolio_pymunk.learning.qlearning import QLearner
 from koolio_pymunk.learning.qtable import (
     QTableStore,
-    check_compatible,
     load_qtable,
-    sensor_signature,
 )
+from koolio_pymunk.learning.run_identity import sensor_signature
 from koolio_pymunk.learning.training import train
 from koolio_pymunk.store.config import load_config
 from koolio_pymunk.store.errors import QTableError
@@ -153,7 +153,7 @@ def test_init_qtable_from_policy_continues_learning(trained, tmp_path):
     pol = tmp_path / "p.json"
     write_policy(policy_document(table), pol)
     loaded = load_any_table(pol)
-    check_compatible(loaded, env.layout, sensor_signature(env.config), str(pol))
+    run_identity.check(loaded, env, "start", str(pol))
     cfg = tmp_path / "short.yaml"
     cfg.write_text("episode: {max_steps: 30}\n")
     new = tmp_path / "new.qtable"

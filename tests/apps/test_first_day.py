@@ -17,6 +17,7 @@ os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
 
 from koolio_pymunk.apps import cli
+from koolio_pymunk.store.episode_log import log_rows
 
 REPO = Path(__file__).resolve().parents[2]
 XDG_LINE = "XDG_RUNTIME_DIR is invalid or not set"
@@ -225,8 +226,8 @@ def test_the_window_numbers_episodes_from_1_as_train_the_curve_and_the_log_do(he
     session.step()
     assert hud.stats_rows(session, 0.0)[0][1].startswith("This episode (#7,")
     session.exit(save=False)
-    rows = (here / "w.csv").read_text().splitlines()[1:]
-    assert [r.split(",")[0] for r in rows] == ["0", "1", "2", "3", "4", "5"]
+    rows = log_rows(here / "w.csv")
+    assert [r["episode"] for r in rows] == ["0", "1", "2", "3", "4", "5"]
     code, out, _ = run(capsys, "train", "--arena", "room", "--config", "tiny.yaml",
                        "--qtable", "t.qtable", "--episodes", "6")  # fmt: skip
     assert code == 0 and "episode      6/6 " in out

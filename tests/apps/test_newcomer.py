@@ -18,10 +18,11 @@ import pytest
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
 
-from inputs import open_table
+from inputs import learned, open_table
 
 from koolio_pymunk.apps import cli
-from koolio_pymunk.learning.qtable import QTableStore, load_qtable, sensor_signature
+from koolio_pymunk.learning.qtable import QTableStore, load_qtable
+from koolio_pymunk.learning.run_identity import sensor_signature
 from koolio_pymunk.store.config import PROFILE_DIR, load_config
 from koolio_pymunk.task.env import KoolioEnv
 from koolio_pymunk.world.arena import arena_record
@@ -153,7 +154,7 @@ def test_the_header_records_goal_and_world_only_when_not_the_defaults(here, caps
         assert run(capsys, *argv)[0] == 0
     header = {n: header_of((here / f"{n}.qtable").read_bytes()) for n in ("d", "g201", "r", "w")}
     assert "goal" not in header["d"] and "world" not in header["d"]
-    assert (here / "d.qtable").read_bytes() == (here / "g201.qtable").read_bytes()
+    assert learned(here / "d.qtable") == learned(here / "g201.qtable")  # the same run
     assert header["r"]["goal"] == "random" and "world" not in header["r"]
     assert header["w"]["world"] == "koolio-real" and "goal" not in header["w"]
 
@@ -172,7 +173,7 @@ def test_a_configuration_with_realism_records_the_world_it_ran_in(here, capsys) 
     argv = ["train", *ROOM, "--world", "koolio-real", "--qtable", "w.qtable", "--log", ""]
     assert run(capsys, *argv, "--episodes", "2", "--quiet")[0] == 0
     assert header_of((here / "c.qtable").read_bytes())["world"] == "koolio-real"
-    assert (here / "c.qtable").read_bytes() == (here / "w.qtable").read_bytes()
+    assert learned(here / "c.qtable") == learned(here / "w.qtable")
     code, out, err = run(capsys, "eval", *ROOM, "--world", "koolio-real", "--qtable", "c.qtable",
                          "--episodes", "1")  # fmt: skip
     assert code == 0 and err == ""
@@ -242,15 +243,19 @@ def test_eval_in_another_arena_does_not_name_this_arenas_goal(here, capsys) -> N
     assert "(1 episode, trained for goal 201 in the ideal world)" in out.splitlines()[0]
 
 
-def test_eval_of_a_policy_file_does_not_guess_its_goal_and_world(here, capsys) -> None:
+def test_eval_of_a_policy_file_reads_its_goal_and_world(here, capsys) -> None:
+    """A policy records the table's arena, goal and world (export keeps them): eval names
+    them and says when it scores another goal, as for the table."""
     argv = ["--qtable", "g.qtable", "--log", ""]
     assert run(capsys, "train", *ROOM, *argv, "--goal", "random", "--episodes", "1")[0] == 0
     assert run(capsys, "export", "--qtable", "g.qtable", "--out", "g.json")[0] == 0
     code, out, err = run(capsys, "eval", *ROOM, "--qtable", "g.json", "--episodes", "1")
-    assert code == 0 and "warning" not in err
+    assert code == 0 and err.strip().splitlines() == [
+        "warning: g.json: trained for a random goal per episode, scored here for goal 201"
+    ]
     assert out.splitlines()[0] == (
-        "greedy evaluation of g.json (1 episode, a policy file: its goal and world are not "
-        "recorded)"
+        "greedy evaluation of g.json (1 episode, trained for a random goal per episode in "
+        "the ideal world)"
     )
 
 
@@ -434,7 +439,7 @@ def test_world_ideal_is_the_default_world(here, capsys) -> None:
     assert run(capsys, "train", *ROOM, "--episodes", "2", "--qtable", "a.qtable")[0] == 0
     argv = ["train", *ROOM, "--episodes", "2", "--qtable", "b.qtable", "--world", "ideal"]
     assert run(capsys, *argv)[0] == 0
-    assert (here / "a.qtable").read_bytes() == (here / "b.qtable").read_bytes()
+    assert learned(here / "a.qtable") == learned(here / "b.qtable")
     code, out, err = run(capsys, "eval", *ROOM, "--qtable", "a.qtable", "--episodes", "1",
                          "--world", "ideal")  # fmt: skip
     assert code == 0 and "the ideal world" in out and "warning" not in err

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from inputs import same_run
 
 from koolio_pymunk.apps import cli
 from koolio_pymunk.apps.sweep import load_spec, parse_spec, plan, run_sweep
@@ -86,8 +87,9 @@ def test_resume_skips_finished_runs_and_matches(spec_file, tmp_path, capsys):
     assert evals[0].startswith("episode,goal_rate,mean_steps,mean_bumps")
     assert [line.split(",")[0] for line in evals[1:]] == ["2", "3"]
     train_log = (out / "runs" / first[0]["run_id"] / "train.csv").read_text().splitlines()
-    assert train_log[0] == "episode,reward,steps,bumps,outcome,rescued,epsilon,goal"
-    assert len(train_log) == 4
+    assert train_log[0].startswith("# koolio-pymunk run ")  # the table's run
+    assert train_log[1] == "episode,reward,steps,bumps,outcome,rescued,epsilon,goal"
+    assert len(train_log) == 5
     assert (out / "curves.png").read_bytes()[:4] == b"\x89PNG"
     # lose one run entirely and another's results.csv row only (its result.json remains)
     lines = (out / "results.csv").read_text().splitlines()
@@ -122,7 +124,8 @@ def test_a_run_s_checkpoints_are_train_eval_every_s_checks(tmp_path):
             "--episodes", "5", "--eval-every", "2", "--eval-episodes", "4", "--qtable",
             str(table), "--quiet"]  # fmt: skip
     assert cli.main(argv) == 0
-    assert (run / "qtable.qtable").read_bytes() == table.read_bytes()
+    assert same_run(run / "qtable.qtable", table)
+    assert (run / "train.csv").read_bytes() == (tmp_path / "t.csv").read_bytes()
     checks = list(csv.DictReader((tmp_path / "t.evals.csv").open()))
     assert [r["episode"] for r in swept] == ["2", "4", "5"]
     assert [c["episode"] for c in checks] == ["2", "4"]

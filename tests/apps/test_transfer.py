@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from inputs import same_run
 
 from koolio_pymunk import robot_runtime as rt
 from koolio_pymunk.apps.cli import main
@@ -131,8 +132,8 @@ def test_transfer_command_end_to_end_and_reproducible(tmp_path, capsys) -> None:
     assert without_timing(tmp_path / "b" / "transfer.json") == doc
     for name in ("ideal.qtable", "dr.csv", "ideal-robot.csv", "dr-robot.policy.json"):
         for seed in (0, 1):
-            a = (tmp_path / "a" / f"seed-{seed}" / name).read_bytes()
-            assert a == (tmp_path / "b" / f"seed-{seed}" / name).read_bytes()
+            a, b = (tmp_path / d / f"seed-{seed}" / name for d in "ab")
+            assert same_run(a, b), name
 
 
 def _has_matplotlib() -> bool:

@@ -108,7 +108,7 @@ def test_nothing_barred_draws_as_the_rule_off() -> None:
 def _policy(no_undo: bool):
     from koolio_pymunk import robot_runtime as rt
     from koolio_pymunk.apps.export import policy_document
-    from koolio_pymunk.learning.qtable import sensor_signature
+    from koolio_pymunk.learning.run_identity import sensor_signature
     from koolio_pymunk.store.config import Config
 
     cfg = Config()
@@ -156,8 +156,8 @@ def test_many_robots_learn_under_the_rule(tmp_path, capsys) -> None:
     """The step engine runs the rule for any number of robots (it was refused before the
     engine); the table records it."""
     from koolio_pymunk.apps.cli import main
-    from koolio_pymunk.learning.algorithms import table_rule
     from koolio_pymunk.learning.qtable import load_qtable
+    from koolio_pymunk.learning.run_identity import table_rule
 
     cfg = tmp_path / "n.yaml"
     cfg.write_text("learner: {no_undo: true}\n")

@@ -198,8 +198,8 @@ def test_dyna_model_is_saved_in_the_table_file_under_its_crc(tmp_path) -> None:
 
 def test_one_step_q_table_has_no_new_header_keys(tmp_path) -> None:
     q, _ = _train(tmp_path, "q", 2, small())
-    data = q.read_bytes()
-    assert b"algorithm" not in data and b"sections" not in data
+    meta = load_qtable(q).meta
+    assert "algorithm" not in meta and "sections" not in meta
 
 
 @pytest.mark.parametrize("algorithm", ["qlambda", "dyna"])
@@ -285,7 +285,7 @@ def _policy_pair(algorithm: str, **learner_cfg):
     """A table with random values, its exported policy, and the configuration."""
     from koolio_pymunk import robot_runtime as rt
     from koolio_pymunk.apps.export import policy_document
-    from koolio_pymunk.learning.qtable import sensor_signature
+    from koolio_pymunk.learning.run_identity import sensor_signature
     from koolio_pymunk.store.config import state_fields
 
     cfg = load_config(

@@ -3,14 +3,13 @@
 
 from __future__ import annotations
 
-import csv
 import importlib.util
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from koolio_pymunk.learning import engine
+from koolio_pymunk.learning import engine, run_identity
 from koolio_pymunk.learning.algorithms import make_learner
 from koolio_pymunk.learning.engine import Engine, robots, trace_capacity
 from koolio_pymunk.learning.episodes import INTERRUPTED, Robots
@@ -18,7 +17,7 @@ from koolio_pymunk.learning.evaluation import evaluate
 from koolio_pymunk.learning.qtable import QTable, QTableStore, load_qtable
 from koolio_pymunk.learning.training import train
 from koolio_pymunk.store.config import load_config
-from koolio_pymunk.store.episode_log import LOG_FIELDS
+from koolio_pymunk.store.episode_log import LOG_FIELDS, log_rows
 from koolio_pymunk.task.env import KoolioEnv
 
 _spec = importlib.util.spec_from_file_location(
@@ -334,7 +333,7 @@ def test_a_resumed_run_with_robots_is_seeded_but_not_the_straight_run(tmp_path) 
 
 def test_episodes_numbered_in_completion_order_and_logged(tmp_path) -> None:
     q, log, res = run(tmp_path, "a", episodes=7, robots_=3)
-    rows = list(csv.DictReader(log.open()))
+    rows = log_rows(log)
     assert list(rows[0]) == list(LOG_FIELDS)
     assert [int(r["episode"]) for r in rows] == list(range(7))
     assert res.episodes_run == 7 and res.steps == sum(int(r["steps"]) for r in rows)
@@ -381,7 +380,7 @@ def test_ctrl_c_folds_every_unfinished_episode(tmp_path, monkeypatch) -> None:
     monkeypatch.setattr(Engine, "advance", interrupting)
     q, log, res = run(tmp_path, "a", episodes=50, robots_=3)
     assert res.interrupted
-    rows = list(csv.DictReader(log.open()))
+    rows = log_rows(log)
     cut = [r for r in rows if r["outcome"] == "interrupted"]
     assert len(cut) == 3 and [int(r["episode"]) for r in cut] == [29, 30, 31]
     assert load_qtable(q).rows == res.table.rows
@@ -396,7 +395,7 @@ def test_the_pymunk_backend_learns_the_same_with_robots(tmp_path) -> None:
         q = tmp_path / f"{backend}.qtable"
         res = train(env, QTableStore(q), 4, 3, None, report=None, robots=2)
         assert (res.python_reason is None) == (backend == "fast")
-        tables.append(q.read_bytes())
+        tables.append(run_identity.learned_digest(load_qtable(q)))  # the configurations differ
     assert tables[0] == tables[1]
 
 

@@ -13,7 +13,7 @@ import time
 from pathlib import Path
 
 import pytest
-from inputs import expect_error
+from inputs import expect_error, same_run
 
 from koolio_pymunk.apps.cli import main
 from koolio_pymunk.learning import evaluation
@@ -25,6 +25,7 @@ from koolio_pymunk.learning.evaluation import (
     evaluate,
 )
 from koolio_pymunk.learning.qtable import QTableStore, load_qtable
+from koolio_pymunk.learning.run_identity import RunIdentity
 from koolio_pymunk.learning.training import train
 from koolio_pymunk.store.config import Config
 from koolio_pymunk.store.errors import KoolioError, QTableError
@@ -253,8 +254,8 @@ def test_a_real_sigkill_resumes_exactly(tmp_path) -> None:
     done = load_qtable(tmp_path / "part.qtable").meta["episodes"]
     assert 3 <= done < 24  # the premise: killed mid-run
     assert main(argv("part", 24)) == 0  # --episodes is the total to reach
-    for name in ("qtable", "best.qtable"):
-        assert (tmp_path / f"part.{name}").read_bytes() == (tmp_path / f"full.{name}").read_bytes()
+    for name in ("qtable", "best.qtable"):  # the same run from another command line
+        assert same_run(tmp_path / f"part.{name}", tmp_path / f"full.{name}")
     assert rows(evals) == rows(tmp_path / "full.evals.csv")
 
 
@@ -373,7 +374,12 @@ def test_a_best_table_of_another_layout_is_refused(tmp_path) -> None:
     cfg.sensors.camera.camera_sensors_deg = [0.0, -90.0, 90.0]
     with pytest.raises(QTableError, match=r"a\.best\.qtable: sensors\.camera_sensors_deg"):
         PeriodicCheck.open(
-            KoolioEnv("room", config=cfg), QTableStore(tmp_path / "a.qtable"), None, 2, 2, 0
+            RunIdentity.of_run(KoolioEnv("room", config=cfg)),
+            QTableStore(tmp_path / "a.qtable"),
+            None,
+            2,
+            2,
+            0,
         )
 
 

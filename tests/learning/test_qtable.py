@@ -5,12 +5,12 @@ from __future__ import annotations
 import os
 
 import pytest
-from inputs import open_table
+from inputs import made_for, open_table
 
+from koolio_pymunk.learning import run_identity
 from koolio_pymunk.learning.qtable import (
     QTable,
     QTableStore,
-    check_compatible,
     human_bytes,
     load_qtable,
 )
@@ -165,10 +165,10 @@ def test_layout_mismatch_is_refused_not_overwritten(tmp_path) -> None:
     assert store.path.read_bytes() == before
 
 
-def test_check_compatible_message_is_one_line() -> None:
+def test_an_identity_refusal_is_one_line() -> None:
     t = _table()
     with pytest.raises(QTableError) as exc:
-        check_compatible(t, LAYOUT, {"sonar_arc_deg": 45.0}, "x.qtable")
+        run_identity.check(t, made_for(LAYOUT, {"sonar_arc_deg": 45.0}), "inspect", "x.qtable")
     assert "\n" not in str(exc.value) and str(exc.value).startswith("x.qtable: sensors.")
 
 

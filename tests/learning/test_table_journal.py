@@ -11,12 +11,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from inputs import open_table
 
 from koolio_pymunk.apps.cli import main
 from koolio_pymunk.learning import table_journal, training
 from koolio_pymunk.learning.qtable import QTable, QTableStore, load_qtable
 from koolio_pymunk.learning.training import train
 from koolio_pymunk.store.config import load_config
+from koolio_pymunk.store.episode_log import log_rows
 from koolio_pymunk.store.errors import QTableError
 from koolio_pymunk.store.keyword import KeywordLayout
 from koolio_pymunk.task.env import KoolioEnv
@@ -31,7 +33,7 @@ def env() -> KoolioEnv:
 def _journaled(tmp_path: Path, records: int = 5) -> tuple[QTableStore, QTable, list[dict]]:
     """A store with a snapshot and ``records`` journal records; the table after each."""
     store = QTableStore(tmp_path / "t.qtable", fsync="second")
-    table = store.open(LAYOUT, {}, 0.0)
+    table = open_table(store, LAYOUT, {}, 0.0)
     rng = np.random.default_rng(0)
     after = []
     for k in range(records):
@@ -90,7 +92,7 @@ def test_a_journal_of_another_snapshot_is_ignored(tmp_path) -> None:
     store, table, _ = _journaled(tmp_path)
     stale = store.journal.read_bytes()
     again = QTableStore(store.path, fsync="second")
-    t = again.open(LAYOUT, {}, 0.0)
+    t = open_table(again, LAYOUT, {}, 0.0)
     again.save(t)  # the snapshot holds the five records; the journal is removed
     again.close()
     assert not store.journal.exists()
@@ -158,42 +160,47 @@ def test_durable_snapshots_at_most_once_a_second(tmp_path, monkeypatch) -> None:
     assert snapshots == [5, 10, 12] and records == [1, 2, 3, 4, 6, 7, 8, 9, 11, 12]
 
 
-def _argv(folder: Path, name: str, episodes: int) -> list[str]:
+def _argv(episodes: int) -> list[str]:
+    """The run, in file names relative to its folder: two folders run the same command
+    line (a table records it: the bytes compare)."""
     return [
-        *("train", "--arena", "room", "--config", str(folder / "c.yaml"), "--quiet"),
-        *("--episodes", str(episodes), "--seed", "5"),
-        *("--qtable", str(folder / f"{name}.qtable"), "--log", str(folder / f"{name}.csv")),
+        *("train", "--arena", "room", "--config", "c.yaml", "--quiet"),
+        *("--episodes", str(episodes), "--seed", "5", "--qtable", "t.qtable", "--log", "t.csv"),
     ]
 
 
-def test_a_sigkill_loses_no_finished_episode_and_resumes_exactly(tmp_path) -> None:
+def test_a_sigkill_loses_no_finished_episode_and_resumes_exactly(tmp_path, monkeypatch) -> None:
     """A run killed (SIGKILL) between two durable snapshots: the table file and its
     journal hold every episode the log holds but the one being written; the same command
     ends byte-identical to an uninterrupted run, and every reader reads the journal."""
-    (tmp_path / "c.yaml").write_text("episode: {max_steps: 40}\n")
-    assert main(_argv(tmp_path, "full", 3000)) == 0
-    log, journal = tmp_path / "part.csv", tmp_path / "part.qtable.journal"
-    proc = subprocess.Popen([sys.executable, "-m", "koolio_pymunk", *_argv(tmp_path, "part", 3000)])
+    full, part = tmp_path / "full", tmp_path / "part"
+    for folder in (full, part):
+        folder.mkdir()
+        (folder / "c.yaml").write_text("episode: {max_steps: 40}\n")
+    monkeypatch.chdir(full)
+    assert main(_argv(3000)) == 0
+    log, journal = part / "t.csv", part / "t.qtable.journal"
+    proc = subprocess.Popen([sys.executable, "-m", "koolio_pymunk", *_argv(3000)], cwd=part)
     deadline = time.monotonic() + 120
     while not (journal.exists() and journal.stat().st_size > 2000):
         assert proc.poll() is None and time.monotonic() < deadline, "the run ended first"
         time.sleep(0.002)
     proc.send_signal(signal.SIGKILL)
     proc.wait()
-    table = load_qtable(tmp_path / "part.qtable")
-    snapshot = QTable.from_bytes((tmp_path / "part.qtable").read_bytes())
-    logged = log.read_text().count("\n") - 1
+    table = load_qtable(part / "t.qtable")
+    snapshot = QTable.from_bytes((part / "t.qtable").read_bytes())
+    logged = len(log_rows(log))
     assert snapshot.meta["episodes"] < table.meta["episodes"]  # the premise: journaled
     assert table.meta["episodes"] in (logged, logged - 1)  # a row is written after its record
     out = subprocess.run(
-        [sys.executable, "-m", "koolio_pymunk", "info", "--qtable", str(tmp_path / "part.qtable")],
-        capture_output=True, text=True, check=True,
+        [sys.executable, "-m", "koolio_pymunk", "info", "--qtable", "t.qtable"],
+        capture_output=True, text=True, check=True, cwd=part,
     )  # fmt: skip
     assert f"{table.meta['episodes']} episodes" in out.stdout
-    assert main(_argv(tmp_path, "part", 3000)) == 0
-    for suffix in (".qtable", ".csv"):
-        full, part = tmp_path / f"full{suffix}", tmp_path / f"part{suffix}"
-        assert part.read_bytes() == full.read_bytes(), suffix
+    monkeypatch.chdir(part)
+    assert main(_argv(3000)) == 0
+    for name in ("t.qtable", "t.csv"):
+        assert (part / name).read_bytes() == (full / name).read_bytes(), name
     assert not journal.exists()
 
 

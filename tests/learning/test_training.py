@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import csv
-
 import pytest
 
 from koolio_pymunk.learning.action_rules import allowed
@@ -12,7 +10,7 @@ from koolio_pymunk.learning.qlearning import QLearner
 from koolio_pymunk.learning.qtable import QTableStore, load_qtable
 from koolio_pymunk.learning.training import train
 from koolio_pymunk.store.config import Config
-from koolio_pymunk.store.episode_log import LOG_FIELDS
+from koolio_pymunk.store.episode_log import LOG_FIELDS, log_rows
 from koolio_pymunk.task.env import KoolioEnv
 
 
@@ -48,7 +46,7 @@ def test_resume_continues_exactly(tmp_path) -> None:
 
 def test_log_format(tmp_path) -> None:
     _, log, res = run(tmp_path, "a", 3)
-    rows = list(csv.DictReader(log.open()))
+    rows = log_rows(log)
     assert tuple(rows[0].keys()) == LOG_FIELDS
     assert [int(r["episode"]) for r in rows] == [0, 1, 2]
     assert all(r["outcome"] in ("goal", "end_of_world", "truncated") for r in rows)
@@ -79,7 +77,7 @@ def test_ctrl_c_folds_unfinished_episode(tmp_path, monkeypatch) -> None:
     folded = load_qtable(q)
     assert folded.rows != after_two.rows  # the partial episode's updates were saved
     assert folded.meta["episodes"] == 2  # ...but it is not counted as finished
-    last = list(csv.DictReader(log.open()))[-1]
+    last = log_rows(log)[-1]
     assert last["outcome"] == "interrupted" and last["episode"] == "2"
 
 
@@ -119,7 +117,7 @@ def test_evaluate_is_greedy_and_does_not_learn(tmp_path, monkeypatch) -> None:
 
     monkeypatch.setattr(QLearner, "act", recorded)
     env = small_env()
-    a = evaluate(env, table, 4, seed=0)
+    a = evaluate(env, table, 4, seed=0, compiled=False)  # the reference: its act is patched
     assert [(s, action) for s, action, best, _ in steps if action not in best] == []
     assert {eps for *_, eps in steps} == {0.0}
     told = sum(len(best) == 1 for _, _, best, _ in steps)  # a step where exploring would show
@@ -136,7 +134,7 @@ def test_the_arena_files_goal_is_read_again_when_the_file_changes(tmp_path) -> N
     goal is seen (the cache is keyed by the file's size and modification time)."""
     import os
 
-    from koolio_pymunk.learning.training import arena_goal
+    from koolio_pymunk.learning.run_identity import arena_goal
     from koolio_pymunk.world.arena import arena_path
 
     text = arena_path("hallway").read_text()

@@ -9,15 +9,15 @@ from inputs import open_table
 from koolio_pymunk import robot_runtime as rt
 from koolio_pymunk.apps.cli import main
 from koolio_pymunk.apps.export import policy_document
+from koolio_pymunk.learning import run_identity
 from koolio_pymunk.learning.episodes import Episodes
 from koolio_pymunk.learning.qlearning import QLearner
 from koolio_pymunk.learning.qtable import (
     QTable,
     QTableStore,
-    check_compatible,
     load_qtable,
-    sensor_signature,
 )
+from koolio_pymunk.learning.run_identity import RunIdentity, sensor_signature
 from koolio_pymunk.learning.training import train
 from koolio_pymunk.sensing.memory import Memory
 from koolio_pymunk.store.config import Config, MemoryConfig, load_config
@@ -120,15 +120,15 @@ def test_memory_fields_follow_the_sensors_in_the_keyword() -> None:
 
 def test_a_table_of_one_memory_is_refused_under_another() -> None:
     mem = load_config(overrides={"sensors": {"memory": {"goal_camera": True}}})
-    env, plain = KoolioEnv("room", config=mem), KoolioEnv("room")
+    env = KoolioEnv("room", config=mem)
     table = QTable(env.layout, {"sensors": sensor_signature(mem)})
     with pytest.raises(QTableError, match="GoalMemory") as err:
-        check_compatible(table, plain.layout, sensor_signature(Config()), "t.qtable")
+        run_identity.check(table, RunIdentity.of_config(Config()), "inspect", "t.qtable")
     assert str(err.value).startswith("t.qtable: layout: table made for")
     forgets = {"goal_camera": True, "forget_after": 5}
     forget = load_config(overrides={"sensors": {"memory": forgets}})
     with pytest.raises(QTableError, match=r"sensors\.memory: table made for .*forget_after.*0"):
-        check_compatible(table, env.layout, sensor_signature(forget), "t.qtable")
+        run_identity.check(table, RunIdentity.of_config(forget), "inspect", "t.qtable")
 
 
 def test_memoryless_signature_is_unchanged() -> None:

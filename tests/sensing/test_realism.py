@@ -9,10 +9,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from inputs import log_body
 from sensing_agreement import compare_backends, free_poses, same_readings
 
 from koolio_pymunk.apps.cli import main
-from koolio_pymunk.learning.qtable import QTable, QTableStore
+from koolio_pymunk.learning import run_identity
+from koolio_pymunk.learning.qtable import QTable, QTableStore, load_qtable
 from koolio_pymunk.learning.training import train
 from koolio_pymunk.sensing.realism import (
     F_BEAM,
@@ -26,7 +28,7 @@ from koolio_pymunk.sensing.realism import (
 from koolio_pymunk.sensing.realism_kernel import apply_realism
 from koolio_pymunk.sensing.suite import SensorSuite
 from koolio_pymunk.store.config import Config, SensorConfig, load_config
-from koolio_pymunk.store.episode_log import LOG_FIELDS
+from koolio_pymunk.store.episode_log import LOG_FIELDS, log_rows
 from koolio_pymunk.store.errors import ConfigError
 from koolio_pymunk.store.realism_config import MotionRealism, RealismConfig
 from koolio_pymunk.task.env import KoolioEnv
@@ -311,14 +313,15 @@ def test_pings_read_the_median_of_the_beam_draws() -> None:
 
 
 def test_several_pings_change_nothing_in_the_ideal_world(tmp_path) -> None:
-    """No beam model, no draws: more pings give the ideal world's table, byte for byte."""
+    """No beam model, no draws: more pings learn the ideal world's table (the values, the
+    identity: byte for byte but the provenance, whose configuration differs)."""
     tables = []
     for pings in (1, 5):
         cfg = load_config(overrides={"sensors": {"sonar": {"pings": pings}}})
         env = KoolioEnv("hallway", config=cfg)
         store = QTableStore(tmp_path / f"p{pings}.qtable")
         train(env, store, 20, 3, tmp_path / f"p{pings}.csv", report=None)
-        tables.append(store.path.read_bytes())
+        tables.append(run_identity.learned_digest(load_qtable(store.path)))
     assert tables[0] == tables[1]
 
 
@@ -376,9 +379,11 @@ def test_every_model_off_gives_the_ideal_tables_and_logs(tmp_path) -> None:
         small_run(tmp_path, "ideal", None, 3),
         small_run(tmp_path, "off", off, 3),
     )
-    assert off_log == ideal_log
+    assert log_body(off_log) == log_body(ideal_log)  # the run lines name other runs
     a, b = QTable.from_bytes(ideal_table), QTable.from_bytes(off_table)
     assert b.meta.pop("world") == off.name  # the header names the world it was given
+    for t in (a, b):  # and where each came from (the configurations differ)
+        del t.meta["provenance"], t.meta["run_id"]
     assert (a.rows, a.meta, a.sections) == (b.rows, b.meta, b.sections)
 
 
@@ -389,7 +394,9 @@ def test_seeded_runs_with_every_model_on_are_identical_and_resume_exactly(tmp_pa
     small_run(tmp_path, "c", world, 2)
     assert small_run(tmp_path, "c", world, 2) == first  # 2 + 2 resumed = 4 in one go
     assert first != small_run(tmp_path, "ideal", None, 4)
-    rows = list(csv.reader(first[1].decode().splitlines()))
+    lines = first[1].decode().splitlines()
+    assert lines[0].startswith("# koolio-pymunk run ")  # the run line, then the header
+    rows = list(csv.reader(lines[1:]))
     extra = ["realism.camera.misread", "realism.motion.drift_deg"]
     extra += ["realism.sonar.sigma_hit", "realism.sonar.z_rand"]
     assert rows[0] == [*LOG_FIELDS, *extra]
@@ -471,7 +478,7 @@ def test_many_robots_learn_in_a_realistic_world(tmp_path, capsys) -> None:
     args = ["train", "--arena", "room", "--episodes", "4", "--robots", "2", "--quiet"]
     args += ["--qtable", str(tmp_path / "t.qtable"), "--log", str(tmp_path / "t.csv")]
     assert main([*args, "--world", "koolio-real-dr"]) == 0
-    rows = list(csv.DictReader((tmp_path / "t.csv").open()))
+    rows = log_rows(tmp_path / "t.csv")
     draws = {r["realism.motion.slip_sigma"] for r in rows}
     assert len(rows) == 4 and len(draws) == 4
 
@@ -516,7 +523,7 @@ def test_unknown_world_profile_is_one_line_exit_2(capsys) -> None:
 
 def test_koolio_real_keeps_the_sensor_signature() -> None:
     """A table learned in the ideal world loads in koolio-real (the transfer depends on it)."""
-    from koolio_pymunk.learning.qtable import sensor_signature
+    from koolio_pymunk.learning.run_identity import sensor_signature
 
     real = load_config(world="koolio-real")
     assert sensor_signature(real) == sensor_signature(Config())

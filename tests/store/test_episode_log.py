@@ -12,8 +12,10 @@ import pytest
 from inputs import expect_error
 
 from koolio_pymunk.apps import cli
+from koolio_pymunk.learning.qtable import load_qtable
 from koolio_pymunk.store.config import EpsilonSchedule
 from koolio_pymunk.store.episode_log import (
+    RUN_LINE,
     LogWriter,
     RowRules,
     ascii_float,
@@ -70,11 +72,11 @@ def test_plot_leaves_a_torn_row_out(work, capsys, torn):
 @pytest.mark.parametrize(
     ("row", "words"),
     [
-        ("²,-5,3,0,goal,0,0.1,201", "line 4: episode: not an integer >= 0 in digits 0-9: '²'"),
+        ("²,-5,3,0,goal,0,0.1,201", "line 5: episode: not an integer >= 0 in digits 0-9: '²'"),
         ("١٢,-5,3,0,goal,0,0.1,201", "episode: not an integer"),
-        ("2,-5,3,0,goal,0,0.1,201" + HUGE, "line 4: 200,023 characters (a log line has at most"),
-        (f"2,-5,3,0,goal,0,0.1,{HUGE}", "line 4: 200,020 characters"),
-        ("2,nan,3,0,goal,0,0.1,201", "line 4: reward: not a finite decimal number: 'nan'"),
+        ("2,-5,3,0,goal,0,0.1,201" + HUGE, "line 5: 200,023 characters (a log line has at most"),
+        (f"2,-5,3,0,goal,0,0.1,{HUGE}", "line 5: 200,020 characters"),
+        ("2,nan,3,0,goal,0,0.1,201", "line 5: reward: not a finite decimal number: 'nan'"),
         ("2,1e999,3,0,goal,0,0.1,201", "reward: not a finite decimal number"),
         ("2,-5, 3,0,goal,0,0.1,201", "steps: not an integer >= 0"),
         ("2,-5,3,1_0,goal,0,0.1,201", "bumps: not an integer >= 0"),
@@ -90,9 +92,9 @@ def test_a_complete_malformed_row_is_one_line(work, capsys, argv, row, words):
 @pytest.mark.parametrize(
     ("row", "words"),
     [
-        ("²,-5,3,0,goal,0,0.1,201", "line 4: episode: not a number: '²'"),
+        ("²,-5,3,0,goal,0,0.1,201", "line 5: episode: not a number: '²'"),
         ("2,٣,3,0,goal,0,0.1,201", "reward: not a number"),
-        (f"2,-5,3,0,goal,0,0.1,{HUGE}", "line 4: 200,020 characters"),
+        (f"2,-5,3,0,goal,0,0.1,{HUGE}", "line 5: 200,020 characters"),
     ],
 )
 def test_plot_refuses_a_complete_malformed_row(work, capsys, row, words):
@@ -105,13 +107,13 @@ def test_log_rows_checks_every_complete_row(work):
     rows = log_rows(work / "q.csv")
     assert [r["episode"] for r in rows] == ["0", "1", "2"]  # the torn row left out
     _append(work, ",3,0,goal,0,0.1²,201\n")
-    with pytest.raises(KoolioError, match=r"q\.csv: line 5: epsilon: not a finite decimal"):
+    with pytest.raises(KoolioError, match=r"q\.csv: line 6: epsilon: not a finite decimal"):
         log_rows(work / "q.csv")
 
 
 def test_a_writer_refuses_before_it_writes(work):
     text = _append(work, "2,-5,3,0,goal,0,0.1,201\n³,-5,3,0,goal,0,0.1,201\n")
-    with pytest.raises(KoolioError, match=r"q\.csv: line 5: episode"):
+    with pytest.raises(KoolioError, match=r"q\.csv: line 6: episode"):
         LogWriter(work / "q.csv", episodes=9, table=work / "q.qtable")
     assert (work / "q.csv").read_text(encoding="utf-8") == text
     assert not (work / "q.csv.removed").exists()
@@ -152,7 +154,7 @@ def test_a_malformed_row_is_refused_before_the_table_is_read(work, capsys):
     data = (work / "q.qtable").read_bytes()
     (work / "q.qtable").write_bytes(data[: len(data) // 2])  # torn: its backup would be used
     _append(work, "2,-5,3,0,goal,0,0.1,201\n²,-5,3,0,goal,0,0.1,201\n")
-    expect_error(capsys, work, TRAIN, "q.csv: line 5: episode: not an integer")
+    expect_error(capsys, work, TRAIN, "q.csv: line 6: episode: not an integer")
 
 
 def test_a_log_that_cannot_take_its_first_row_is_refused_before_anything(work, capsys):
@@ -199,9 +201,21 @@ def test_the_log_of_another_table_ahead_of_it_is_refused(work, capsys):
     assert cli.main([*mine, "--episodes", "1"]) == 0  # m.qtable: 1 episode, log m.csv
     capsys.readouterr()
     line = expect_error(capsys, work, [*mine, "--log", "q.csv", "--episodes", "3"])
+    theirs = (work / "q.csv").read_text().split("\n")[0].removeprefix(RUN_LINE)
     assert line == (
-        "koolio-pm: error: q.csv: line 3: episode 1 has epsilon 0.149067, which this run's "
-        "learner.epsilon never gives: a row of another run, ahead of the Q-table m.qtable "
+        f"koolio-pm: error: q.csv: line 1: the log of run {theirs}, and the Q-table m.qtable "
+        f"is run {load_qtable(work / 'm.qtable').meta['run_id']}: a log of another run; give "
+        "another --log"
+    )
+    # a log and a table made before run ids: told apart by the log's epsilons
+    shutil.copy(work / "q.csv", work / "old.csv")
+    shutil.copy(work / "m.qtable", work / "old.qtable")
+    _forget_run_ids(work / "old.csv", work / "old.qtable")
+    old = [*mine[:-1], "old.qtable", "--log", "old.csv", "--episodes", "3"]
+    line = expect_error(capsys, work, old)
+    assert line == (
+        "koolio-pm: error: old.csv: line 3: episode 1 has epsilon 0.149067, which this run's "
+        "learner.epsilon never gives: a row of another run, ahead of the Q-table old.qtable "
         "(1 episode); give another --log, or resume with the configuration that wrote it"
     )
     # the same table's own log ahead of it (a stop between two saves) moves as before
@@ -217,6 +231,19 @@ def test_the_log_of_another_table_ahead_of_it_is_refused(work, capsys):
     assert [r["episode"] for r in log_rows(work / "m.csv")] == ["0", "1", "2", "3"]
 
 
+def _forget_run_ids(log: Path, table: Path | None = None) -> None:
+    """Make ``log`` (and ``table``) as a version before run ids wrote them."""
+    text = log.read_text(encoding="utf-8")
+    if text.startswith(RUN_LINE):
+        log.write_text(text.split("\n", 1)[1], encoding="utf-8")
+    if table is not None:
+        t = load_qtable(table)
+        for key in ("run_id", "provenance"):
+            t.meta.pop(key, None)
+        table.write_bytes(t.to_bytes())
+        table.with_name(table.name + ".bak").unlink(missing_ok=True)
+
+
 def _writer(episodes: int, rules: RowRules) -> list[str]:
     """Bring q.csv (in the working folder) in step with a table of ``episodes`` episodes
     under ``rules``; the warnings."""
@@ -230,6 +257,7 @@ def test_rows_ahead_take_any_value_of_the_schedule(work):
     a row ahead passes with any value the schedule gives (here episode 2 with episode
     1's), and fails with one it never gives (half way between two episodes' values)."""
     schedule = EpsilonSchedule(start=0.15, end=0.01, decay_episodes=600)
+    _forget_run_ids(work / "q.csv")  # the schedule tells only logs without a run line
     _append(work, "2,-5,30,0,truncated,0,0.149767,201\n3,-5,30,0,truncated,0,0.01,201\n")
     text = (work / "q.csv").read_text(encoding="utf-8")
     mid = "3,-5,30,0,truncated,0,0.14965,201\n"
@@ -246,17 +274,18 @@ def test_rows_ahead_take_any_value_of_the_schedule(work):
 
 
 def test_a_table_with_a_goal_refuses_rows_of_another_goal(work):
-    """A table that records a goal keeps it for life (check_record): every row of its
-    log names it, kept rows too."""
+    """A table that records a goal keeps it for life (run_identity's rules): every row of
+    its log names it, kept rows too."""
+    rid = load_qtable(work / "q.qtable").meta["run_id"]
     before = (work / "q.csv").read_text(encoding="utf-8")
     with pytest.raises(KoolioError) as info:
-        _writer(2, RowRules(goal="302"))
+        _writer(2, RowRules(goal="302", run_id=rid))
     assert str(info.value) == (
-        "q.csv: line 2: episode 0 was logged for goal 201, and the Q-table q.qtable is "
+        "q.csv: line 3: episode 0 was logged for goal 201, and the Q-table q.qtable is "
         "trained for goal 302: a row of another run; give another --log"
     )
     assert (work / "q.csv").read_text(encoding="utf-8") == before
-    assert _writer(2, RowRules(goal="201")) == []
+    assert _writer(2, RowRules(goal="201", run_id=rid)) == []
 
 
 @pytest.mark.parametrize(
@@ -296,7 +325,7 @@ def test_a_log_without_rows_beside_a_trained_table_warns(work, capsys, state, wh
     """Audit: a deleted or emptied log resumed silently at the table's count, while a log
     lacking only its last rows warned. The same warning now, one line; training goes on.
     A table the run makes itself (``--init-qtable``) starts its new log quietly."""
-    header = (work / "q.csv").read_text(encoding="utf-8").split("\n")[0]
+    header = "\n".join((work / "q.csv").read_text(encoding="utf-8").split("\n")[:2])
     content = {"missing": None, "empty": "", "header": header + "\n"}[state]
     if content is None:
         (work / "q.csv").unlink()
@@ -317,7 +346,7 @@ def test_a_log_without_rows_beside_a_trained_table_warns(work, capsys, state, wh
 def test_a_log_lacking_its_last_row_names_it(work, capsys):
     """The kill between a save and its row: one row missing, named as one."""
     lines = (work / "q.csv").read_text(encoding="utf-8").split("\n")
-    (work / "q.csv").write_text("\n".join(lines[:2]) + "\n", encoding="utf-8")
+    (work / "q.csv").write_text("\n".join(lines[:3]) + "\n", encoding="utf-8")
     assert cli.main(TRAIN) == 0
     assert capsys.readouterr().err.strip().splitlines() == [
         "warning: q.csv: lacks the row of episode 1 (the run stopped after saving the table "

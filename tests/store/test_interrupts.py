@@ -4,7 +4,6 @@ said, and the exit status is 130."""
 
 from __future__ import annotations
 
-import csv
 import os
 import signal
 import subprocess
@@ -16,6 +15,7 @@ import pytest
 
 from koolio_pymunk.learning.qtable import load_qtable
 from koolio_pymunk.store import interrupts
+from koolio_pymunk.store.episode_log import log_rows
 from koolio_pymunk.store.interrupts import SafeInterrupt, deferred
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -94,8 +94,7 @@ def test_raise_once_ignores_ctrl_c_from_then_on():
 
 def _in_step(folder: Path) -> None:
     """The log holds each of the table's episodes once, in order (interrupted rows aside)."""
-    with open(folder / "q.csv", newline="") as fh:
-        rows = list(csv.DictReader(fh))
+    rows = log_rows(folder / "q.csv")
     done = [int(r["episode"]) for r in rows if r["outcome"] != "interrupted"]
     assert done == list(range(load_qtable(folder / "q.qtable").meta["episodes"]))
 

@@ -221,10 +221,11 @@ def run(args: argparse.Namespace) -> int:
     """``koolio-pm view``."""
     every = _check_args(args)
     from ...learning.qtable import QTableStore
+    from ...learning.run_identity import RunIdentity
     from ...learning.training import RunFiles
     from ...store.interrupts import deferred
     from ...task.env import KoolioEnv
-    from ..cli import announce_compile, warn_table
+    from ..cli import announce_compile
     from .session import Session, watched_table
 
     if _headless():
@@ -238,10 +239,9 @@ def run(args: argparse.Namespace) -> int:
     greedy = args.greedy or (existed and not args.learn)
     if greedy:  # what can be refused is refused before anything is compiled or written
         # and, as eval, a table of no episodes or of another world is said so
-        table = watched_table(env, args.qtable, warn=False)
-        warn_table(table, args.qtable, env, verb="watched")
+        watched_table(env, args.qtable, warn=False)
     else:
-        RunFiles.check(env, store, args.log)
+        RunFiles.check(RunIdentity.of_run(env), store, args.log)
     announce_compile(env)
     session = Session(
         env,

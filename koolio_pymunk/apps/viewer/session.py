@@ -27,15 +27,15 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ...learning.algorithms import check_rule, make_learner
+from ...learning import run_identity
+from ...learning.algorithms import make_learner
 from ...learning.episodes import EVAL_STREAM, INTERRUPTED, TRAIN_STREAM, EpisodeResult, Episodes
 from ...learning.qlearning import QLearner
-from ...learning.qtable import QTable, QTableStore, check_compatible, sensor_signature
+from ...learning.qtable import QTable, QTableStore
 from ...learning.training import RunFiles
 from ...store.episode_log import log_rows
 from ...store.errors import KoolioError, located
 from ...task.env import KoolioEnv
-from ...world.arena import arena_record
 
 
 @dataclass
@@ -93,18 +93,16 @@ def read_history(path: str | Path) -> tuple[list[float], list[bool]]:
 
 
 def watched_table(env: KoolioEnv, qtable: str | Path, warn: bool = True) -> QTable:
-    """The table a greedy session watches, checked for ``env`` (its backup when the file
-    is damaged or missing, with a warning unless not ``warn``, as ``train`` and ``eval``
-    read it)."""
+    """The table a greedy session watches, checked for ``env`` (purpose ``watch`` of
+    :func:`~koolio_pymunk.learning.run_identity.check`); its backup when the file is
+    damaged or missing, with a warning unless not ``warn``, as ``train`` and ``eval`` read
+    it."""
     table = QTableStore(qtable).peek(warn=warn)
     if table is None:
         raise KoolioError(
             located(str(qtable), "", "no such Q-table file (--greedy): run koolio-pm train first")
         )
-    check_compatible(
-        table, env.layout, sensor_signature(env.config), str(qtable), arena_record(env.arena)
-    )
-    check_rule(table, env.config.learner, str(qtable), "give view the --config it was learned with")
+    run_identity.check(table, env, "watch", str(qtable))  # its warnings once per process
     return table
 
 
@@ -134,7 +132,8 @@ class Session:
         self.files: RunFiles | None = None
         if self.learn:  # the table and the log locked while the window learns
             store = QTableStore(qtable, purpose="koolio-pm view")
-            self.files = RunFiles.open(env, store, log, "koolio-pm view")
+            run = run_identity.RunIdentity.of_run(env)
+            self.files = RunFiles.open(run, store, log, "koolio-pm view", seed)
             self.table = self.files.table
             self.first = self.files.first
             self.agent = make_learner(self.table, cfg.learner, None, str(qtable))
