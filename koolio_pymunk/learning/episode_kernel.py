@@ -61,10 +61,10 @@ from ..sensing.memory import bearing_code, turned
 from ..sensing.ray_kernel import sense_one_inline
 from ..sensing.realism_kernel import sense_realism
 from ..store.kernel_cache import ensure_fresh
+from ..task.action_rules import allowed_action, barred
 from ..task.env import WRONG_DOOR, KoolioEnv
 from ..world.segment_query import wall_array
 from ..world.swept_move import sweep
-from .action_rules import allowed_action, barred
 from .fleet_kernel import (
     ACTION_EVENT,
     EVENTS,

@@ -312,7 +312,7 @@ class LearnerConfig:
     no_undo: bool = False
     """Never choose the action that undoes the last one (RotateRight right after
     RotateLeft and back, Reverse right after Forward and back), greedy or exploring, in
-    training, evaluation and on the robot (:mod:`koolio_pymunk.learning.action_rules`).
+    training, evaluation and on the robot (:mod:`koolio_pymunk.task.action_rules`).
     Not in the paper: it breaks the two-step loops of aliased states."""
 
 
