@@ -37,6 +37,7 @@ import itertools
 import math
 import types
 import typing
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -471,6 +472,29 @@ def apply_world(cfg: Config, world: str | Path, flag: str = "--world") -> Config
 def config_from_dict(data: dict, source: str = "<config>") -> Config:
     """A validated Config from a nested mapping (e.g. ``Config().to_dict()``)."""
     return _merge(Config(), data, source, "").validate(source)
+
+
+def as_config(config: Config | Mapping | str | Path | None, source: str = "config") -> Config:
+    """A configuration of its own from what a caller gives (``KoolioEnv(config=...)``): a
+    :class:`Config` (copied, never changed), a mapping laid over the defaults as a file's
+    sections are (unknown keys and bad values refused in one line naming the key, with a
+    did-you-mean), a profile name or a file (:func:`load_config`), or None (the defaults).
+
+    >>> as_config({"learner": {"no_undo": True}}).learner.no_undo
+    True
+    >>> as_config({"learner": {"alpah": 0.1}})
+    Traceback (most recent call last):
+    koolio_pymunk.store.errors.ConfigError: config: learner.alpah: unknown key (did you mean...
+    """
+    if isinstance(config, Config):
+        return copy.deepcopy(config)
+    if isinstance(config, Mapping):
+        return config_from_dict(dict(config), source)
+    if config is None or isinstance(config, (str, Path)):
+        return load_config(config)
+    raise ConfigError(
+        located(source, "", f"a profile name, a file, a mapping or a Config, got {shown(config)}")
+    )
 
 
 def _outside_world(key: str, value: Any) -> str | None:
