@@ -6,7 +6,9 @@ taken: no RotateRight right after RotateLeft (and back), no Reverse right after 
 the first after an auto rescue (which moved the robot), are free. The rule holds for the
 greedy choice and for the exploratory one alike, in training, in every evaluation, in
 the window and on the robot (``robot_runtime.py`` repeats it), so a table is always read
-the way it was learned.
+the way it was learned. It lives on the task floor so that the env can say it too: its
+``info["action_mask"]`` (:meth:`~koolio_pymunk.task.env.KoolioEnv.action_masks`) allows
+what a learner under the rule may choose, for learners outside the package.
 
 Why: the hallway's 27-bit state aliases. Facing the south wall the robot is in the
 hallway's most common state, whose best action (RotateRight, learned facing north) turns
