@@ -474,27 +474,43 @@ def config_from_dict(data: dict, source: str = "<config>") -> Config:
     return _merge(Config(), data, source, "").validate(source)
 
 
-def as_config(config: Config | Mapping | str | Path | None, source: str = "config") -> Config:
-    """A configuration of its own from what a caller gives (``KoolioEnv(config=...)``): a
-    :class:`Config` (copied, never changed), a mapping laid over the defaults as a file's
-    sections are (unknown keys and bad values refused in one line naming the key, with a
-    did-you-mean), a profile name or a file (:func:`load_config`), or None (the defaults).
+def as_config(
+    config: Config | Mapping | str | Path | None,
+    overrides: Mapping | None = None,
+    source: str = "config",
+) -> Config:
+    """A configuration of its own from what a caller gives (``KoolioEnv(config=...,
+    overrides=...)``): a :class:`Config` (copied, never changed), a mapping laid over the
+    defaults as a file's sections are (unknown keys and bad values refused in one line
+    naming the key, with a did-you-mean), a profile name or a file (:func:`load_config`),
+    or None (the defaults); then the mapping ``overrides`` laid over that, the same way.
 
     >>> as_config({"learner": {"no_undo": True}}).learner.no_undo
     True
+    >>> cfg = as_config("paper", {"learner": {"no_undo": True}})
+    >>> cfg.learner.no_undo, cfg.rewards.bump
+    (True, -12.0)
     >>> as_config({"learner": {"alpah": 0.1}})
     Traceback (most recent call last):
     koolio_pymunk.store.errors.ConfigError: config: learner.alpah: unknown key (did you mean...
     """
     if isinstance(config, Config):
-        return copy.deepcopy(config)
-    if isinstance(config, Mapping):
-        return config_from_dict(dict(config), source)
-    if config is None or isinstance(config, (str, Path)):
-        return load_config(config)
-    raise ConfigError(
-        located(source, "", f"a profile name, a file, a mapping or a Config, got {shown(config)}")
-    )
+        cfg = copy.deepcopy(config)
+    elif isinstance(config, Mapping):
+        cfg = config_from_dict(dict(config), source)
+    elif config is None or isinstance(config, (str, Path)):
+        cfg = load_config(config)
+    else:
+        raise ConfigError(
+            located(
+                source, "", f"a profile name, a file, a mapping or a Config, got {shown(config)}"
+            )
+        )
+    if overrides is None:
+        return cfg
+    if not isinstance(overrides, Mapping):
+        raise ConfigError(located("overrides", "", f"a mapping, got {shown(overrides)}"))
+    return _merge(cfg, dict(overrides), "overrides", "").validate("overrides")
 
 
 def _outside_world(key: str, value: Any) -> str | None:

@@ -47,9 +47,11 @@ class KoolioEnv(gym.Env):
     **Configuration.** ``config`` is a :class:`~koolio_pymunk.store.config.Config`, a dict
     laid over the defaults as a configuration file's sections are (``{"learner":
     {"no_undo": True}}``), a shipped profile's name (``"paper"``) or a YAML file; None is
-    the defaults. It is copied, never changed. An unknown key or a bad value is refused
-    with one line naming it (``ConfigError``: ``config: learner.alpah: unknown key (did
-    you mean 'alpha'?)``). The registered ids (:mod:`koolio_pymunk.task.registry`,
+    the defaults. It is copied, never changed. ``overrides``, a dict of the same form, is
+    laid over it: ``gym.make("koolio_pymunk/HallwayPaper-v0", overrides={...})`` keeps
+    the id's profile, where ``config=`` would replace it. An unknown key or a bad value is
+    refused with one line naming it (``ConfigError``: ``config: learner.alpah: unknown key
+    (did you mean 'alpha'?)``). The registered ids (:mod:`koolio_pymunk.task.registry`,
     docs/envs.md) are arenas, worlds and profiles of these arguments.
 
     **Action space** ``Discrete(5)``: 0 Stop, 1 RotateLeft (+``rotate_action_arc_deg``),
@@ -164,12 +166,13 @@ class KoolioEnv(gym.Env):
         max_steps: int | None = None,
         world: str | Path | None = None,
         observe_goal: bool = False,
+        overrides: dict[str, Any] | None = None,
     ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             modes = ", ".join(repr(m) for m in self.metadata["render_modes"])
             raise ValueError(f"render_mode: {render_mode!r} is not one of None, {modes}")
         # A configuration passed in is copied, never changed (``max_steps``, ``world``).
-        own = as_config(config)
+        own = as_config(config, overrides)
         cfg = apply_world(own, world) if world is not None else own
         self.world_name = world_name(cfg, world, own.realism)
         """The world the env runs in, however its realism was turned on: ``ideal``, the

@@ -544,8 +544,8 @@ def test_the_observation_before_a_rescue_is_where_the_action_led() -> None:
     assert rescued.layout.state_key(tuple(before)) == plain.state_key  # the update's next state
     np.testing.assert_array_equal(plain_info["observation_before_rescue"], plain_obs)
     assert plain_info["observation_before_rescue"] is not plain_obs  # a copy, not the same array
-    _, reset_info = rescued.reset(seed=3)
-    np.testing.assert_array_equal(reset_info["observation_before_rescue"], rescued._obs())
+    reset_obs, reset_info = rescued.reset(seed=3)
+    np.testing.assert_array_equal(reset_info["observation_before_rescue"], reset_obs)
 
 
 def test_the_goal_door_is_in_info_and_optionally_in_the_observation() -> None:

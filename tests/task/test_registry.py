@@ -164,3 +164,26 @@ def test_a_config_dict_is_laid_over_the_defaults_and_left_unchanged() -> None:
     assert env.config == expected and repr(data) == snapshot
     assert env.observation_space.shape == (2 + 2 + 6,)  # two cameras: goal and end of world
     check_env(env, skip_render_check=True)
+
+
+def test_overrides_keep_the_ids_profile_where_config_replaces_it() -> None:
+    rule = {"learner": {"no_undo": True}}
+    kept = gym.make("koolio_pymunk/HallwayPaper-v0", overrides=rule).unwrapped.config
+    replaced = gym.make("koolio_pymunk/HallwayPaper-v0", config=rule).unwrapped.config
+    assert kept.learner.no_undo and replaced.learner.no_undo
+    assert kept.rewards.bump == -12.0 and kept.sensors.camera.camera_sensors_deg[1] == 90.0
+    assert replaced.rewards.bump == Config().rewards.bump  # the profile is gone
+
+
+@pytest.mark.parametrize(
+    ("overrides", "message"),
+    [
+        ({"learner": {"alpah": 0.1}}, "overrides: learner.alpah: unknown key (did you mean"),
+        ({"episode": {"max_steps": 1.5}}, "overrides: episode.max_steps: expected an integer"),
+        ("paper", "overrides: a mapping, got 'paper'"),
+    ],
+)
+def test_bad_overrides_are_one_line_naming_the_key(overrides: object, message: str) -> None:
+    with pytest.raises(ConfigError) as caught:
+        gym.make("koolio_pymunk/HallwayPaper-v0", overrides=overrides)
+    assert str(caught.value).startswith(message) and "\n" not in str(caught.value)
