@@ -3,7 +3,8 @@
 ``import koolio_pymunk`` calls :func:`register_envs`, so ``gymnasium.make`` and
 ``gymnasium.pprint_registry()`` know every id of :data:`ENVS` under the namespace
 ``koolio_pymunk``. The same function is the package's ``gymnasium.envs`` entry point
-(``pyproject.toml``): the plugin mechanism of Gymnasium 0.26-0.29, which called every such
+(``pyproject.toml``): the plugin mechanism of Gymnasium 0.26-0.29
+(``registration.load_env_plugins``, run by ``import gymnasium``), which called every such
 entry point inside ``gymnasium.envs.registration.namespace(name)``. Gymnasium 1.0 dropped
 the loader (the package needs 1.0 or later), so there the ids come from the import, or
 from naming the module in the id: ``gym.make("koolio_pymunk:koolio_pymunk/Room-v0")``.

@@ -89,7 +89,7 @@ def test_pprint_registry_lists_every_id_after_the_import() -> None:
 
 
 def test_the_entry_point_registers_every_id_as_a_plugin_loader_calls_it() -> None:
-    """Gymnasium 0.26-0.29's ``load_plugin_envs``: each entry point of the group
+    """Gymnasium 0.26-0.29's ``load_env_plugins``: each entry point of the group
     ``gymnasium.envs`` is loaded and called inside ``namespace(entry point's name)``.
     Gymnasium 1.x has no loader; this does what it did, in a fresh interpreter."""
     code = (
