@@ -1,7 +1,9 @@
 """koolio-pymunk: the Koolio delivery robot (FCRAR 2008) on pymunk, learning by Q-learning.
 
-Importing the package registers ``koolio_pymunk/Hallway-v0`` (the paper's hallway, with
-Gymnasium's ``TimeLimit`` at the default 1500-step cap) with Gymnasium::
+Importing the package registers its Gymnasium ids (:mod:`koolio_pymunk.task.registry`:
+every shipped arena, world and profile, e.g. ``koolio_pymunk/Hallway-v0``, the paper's
+hallway, with Gymnasium's ``TimeLimit`` at the default 1500-step cap; docs/envs.md lists
+them)::
 
     import gymnasium as gym
     import koolio_pymunk
@@ -17,24 +19,15 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-import gymnasium as gym
-
 from ._version import __version__
+from .task.registry import register_envs
 
 if TYPE_CHECKING:
     from .task.env import KoolioEnv
 
 __all__ = ["KoolioEnv", "__version__"]
 
-gym.register(
-    id="koolio_pymunk/Hallway-v0",
-    entry_point="koolio_pymunk.task.env:KoolioEnv",
-    vector_entry_point="koolio_pymunk.task.vector_env:KoolioVectorEnv",
-    kwargs={"arena": "hallway"},
-    # The default ``episode.max_steps`` (tests/task/test_env.py checks they agree); see the
-    # KoolioEnv docstring for how the env's own cap and TimeLimit relate.
-    max_episode_steps=1500,
-)
+register_envs()
 
 
 def __getattr__(name: str) -> Any:

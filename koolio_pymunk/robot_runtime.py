@@ -77,7 +77,7 @@ MAX_POLICY_BYTES = 1 << 30
 #: Learning algorithms (``learner.algorithm``; absent means ``q``) and their parameters.
 ALGORITHMS = {"q": (), "qlambda": ("trace_decay", "trace_cutoff"), "dyna": ("planning_steps",)}
 #: By action index: the action that undoes it (-1: none), for the no-undo rule of a policy
-#: whose ``learner.no_undo`` is true (the simulator's ``learning.action_rules.UNDO``).
+#: whose ``learner.no_undo`` is true (the simulator's ``task.action_rules.UNDO``).
 UNDO = (-1, 2, 1, 4, 3)
 #: Most simulated updates per real step (``learner.planning_steps``; the simulator's
 #: configuration has the same limit): 1e12 made every step last for days.

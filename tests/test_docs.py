@@ -19,6 +19,7 @@ command finds the files an earlier one wrote. How each kind of command is run:
   ``[--flag VALUE]`` runs with the flag;
 * ``python tools/X.py``: the script itself (``view_bench.py``: 2 episodes, 1 repeat;
   ``learning_targets.py``: seed 0 and a budget of 5 episodes); a ``nice`` prefix is dropped;
+  ``python examples/tabular_q.py``: the example with 2 training and 2 greedy episodes;
 * ``koolio-pm edit``, ``tools/arena_editor.py`` and ``python .../robot_runtime.py``: a
   separate interpreter (``-I`` for the runtime: as on the robot); ``scp FILES
   robot:DIR/`` copies them into the folder ``robot/DIR`` where the robot's commands run;
@@ -30,6 +31,10 @@ Inputs that no documented command makes are supplied: the editor script the docs
 (``s.txt``, ``lab.txt``), and training logs in the format the robot runtime writes too
 (``robot.csv``, ``a.csv``, ``b.csv``). A command the test does not know how to run fails
 the test: a new documented command needs a rule here.
+
+The ```` ```python ```` blocks of the pages in :data:`PYTHON_PAGES` are whole programs:
+they run in order, in one namespace, in the page's fresh folder. Other pages' Python
+blocks are fragments (the robot's loop, a learner's calls) and are not run.
 """
 
 from __future__ import annotations
@@ -57,18 +62,21 @@ from koolio_pymunk.apps import cli
 REPO = Path(__file__).resolve().parents[1]
 PAGES = ["README.md", *sorted(f"docs/{p.name}" for p in (REPO / "docs").glob("*.md"))]
 SHELL_LANGUAGES = ("bash", "sh", "")
+#: Pages whose ```python blocks run (module doc).
+PYTHON_PAGES = ("docs/envs.md",)
 SETUP = "set-up (.ci/run runs it from nothing)"
 
 
-def shell_blocks(text: str) -> list[str]:
-    """The bodies of the ```` ```bash ````, ```` ```sh ```` and untagged code blocks."""
+def shell_blocks(text: str, languages: tuple[str, ...] = SHELL_LANGUAGES) -> list[str]:
+    """The bodies of the ```` ```bash ````, ```` ```sh ```` and untagged code blocks (or of
+    the blocks of ``languages``)."""
     blocks, body, language = [], [], None
     for line in text.splitlines():
         if line.startswith("```"):
             if language is None:
                 language, body = line[3:].strip(), []
             else:
-                if language in SHELL_LANGUAGES:
+                if language in languages:
                     blocks.append("\n".join(body))
                 language = None
         elif language is not None:
@@ -246,6 +254,9 @@ class Reader:
         if script == "tools/view_bench.py":
             args = _set(_set(args, "--episodes", "2"), "--repeat", "1")
             return self.script(REPO / script, args[1:])
+        if script == "examples/tabular_q.py":  # a budget of a few episodes
+            args = _set(_set(args, "--episodes", "2"), "--eval-episodes", "2")
+            return self.script(REPO / script, args[1:])
         if script == "tools/learning_targets.py":  # one seed, a budget of a few episodes
             for flag, value in LEARNING_TARGETS_BUDGET:
                 args = _set(args, flag, value)
@@ -317,6 +328,32 @@ def test_every_documented_command_runs(
     with reader_in(tmp_path, ray_instance) as reader, contextlib.redirect_stdout(io.StringIO()):
         done = [reader.run(list(words)) for words in commands]
     assert len(done) == len(commands)
+
+
+def run_python_blocks(text: str, name: str, folder: Path) -> str:
+    """Run the ```` ```python ```` blocks of ``text`` in order, in one namespace, in a fresh
+    page folder under ``folder``; returns what they printed."""
+    blocks = shell_blocks(text, ("python",))
+    assert blocks, f"{name}: no python block"
+    namespace: dict = {"__name__": "__main__"}
+    with reader_in(folder), contextlib.redirect_stdout(io.StringIO()) as out:
+        for block in blocks:
+            exec(compile(block, f"{name} (python block)", "exec"), namespace)
+    return out.getvalue()
+
+
+@pytest.mark.parametrize("page", PYTHON_PAGES)
+def test_every_python_block_of_a_program_page_runs(page: str, tmp_path: Path) -> None:
+    assert run_python_blocks((REPO / page).read_text(), page, tmp_path)  # it printed
+
+
+def test_a_python_block_that_fails_fails_the_page(tmp_path: Path) -> None:
+    page = "text\n```python\nx = 1\n```\n```bash\nexit 1\n```\n```python\nassert x == 2\n```\n"
+    with pytest.raises(AssertionError):
+        run_python_blocks(page, "page", tmp_path / "a")
+    assert run_python_blocks(page.replace("x == 2", "x == 1"), "page", tmp_path / "b") == ""
+    with pytest.raises(AssertionError, match="no python block"):
+        run_python_blocks("```bash\ntrue\n```\n", "page", tmp_path / "c")
 
 
 def test_the_pages_have_commands_and_the_parser_finds_them() -> None:

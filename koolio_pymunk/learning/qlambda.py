@@ -42,7 +42,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..store.config import LearnerConfig
-from .action_rules import allowed
+from ..task.action_rules import allowed
 from .qlearning import QLearner, td_step, td_target
 from .qtable import QTable
 

@@ -35,7 +35,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..store.config import LearnerConfig
-from .action_rules import NONE, allowed, allowed_action, barred
+from ..task.action_rules import NONE, allowed, allowed_action, barred
 from .qtable import QTable
 
 

@@ -12,7 +12,7 @@ The kernels, each the compiled twin of the Python code it names (same float64 op
 in the same order, the same draws from the same generators):
 
 * :func:`choose`: ``QLearner.act``'s epsilon-greedy choice with random tie-breaking and
-  the no-undo rule (``learner.no_undo``, :mod:`~koolio_pymunk.learning.action_rules`);
+  the no-undo rule (``learner.no_undo``, :mod:`~koolio_pymunk.task.action_rules`);
 * :func:`update`: Table 11 (``qlearning.td_target``/``td_step``, ``QLearner.update``);
 * :func:`lambda_update`: Watkins's Q(lambda)'s traced update (``QLambda.observe``), with
   :func:`not_greedy`, its cut;
@@ -32,7 +32,7 @@ from numba.typed import Dict
 
 from ..sensing.inline_twins import inline_twin
 from ..store.kernel_cache import ensure_fresh
-from .action_rules import allowed_action, barred
+from ..task.action_rules import allowed_action, barred
 from .qtable import QTable
 
 ensure_fresh()  # numba's cache, in step with every kernel's source (see there)

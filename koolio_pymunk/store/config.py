@@ -37,6 +37,7 @@ import itertools
 import math
 import types
 import typing
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -331,7 +332,7 @@ class LearnerConfig:
     no_undo: bool = True
     """Never choose the action that undoes the last one (RotateRight right after
     RotateLeft and back, Reverse right after Forward and back), greedy or exploring, in
-    training, evaluation and on the robot (:mod:`koolio_pymunk.learning.action_rules`).
+    training, evaluation and on the robot (:mod:`koolio_pymunk.task.action_rules`).
     Not in the paper (its learner chooses among all five actions: the ``paper``
     profiles): it breaks the two-step loops of aliased states. On by default."""
 
@@ -491,6 +492,45 @@ def apply_world(cfg: Config, world: str | Path, flag: str = "--world") -> Config
 def config_from_dict(data: dict, source: str = "<config>") -> Config:
     """A validated Config from a nested mapping (e.g. ``Config().to_dict()``)."""
     return _merge(Config(), data, source, "").validate(source)
+
+
+def as_config(
+    config: Config | Mapping | str | Path | None,
+    overrides: Mapping | None = None,
+    source: str = "config",
+) -> Config:
+    """A configuration of its own from what a caller gives (``KoolioEnv(config=...,
+    overrides=...)``): a :class:`Config` (copied, never changed), a mapping laid over the
+    defaults as a file's sections are (unknown keys and bad values refused in one line
+    naming the key, with a did-you-mean), a profile name or a file (:func:`load_config`),
+    or None (the defaults); then the mapping ``overrides`` laid over that, the same way.
+
+    >>> as_config({"learner": {"no_undo": True}}).learner.no_undo
+    True
+    >>> cfg = as_config("paper", {"learner": {"no_undo": True}})
+    >>> cfg.learner.no_undo, cfg.rewards.bump
+    (True, -12.0)
+    >>> as_config({"learner": {"alpah": 0.1}})
+    Traceback (most recent call last):
+    koolio_pymunk.store.errors.ConfigError: config: learner.alpah: unknown key (did you mean...
+    """
+    if isinstance(config, Config):
+        cfg = copy.deepcopy(config)
+    elif isinstance(config, Mapping):
+        cfg = config_from_dict(dict(config), source)
+    elif config is None or isinstance(config, (str, Path)):
+        cfg = load_config(config)
+    else:
+        raise ConfigError(
+            located(
+                source, "", f"a profile name, a file, a mapping or a Config, got {shown(config)}"
+            )
+        )
+    if overrides is None:
+        return cfg
+    if not isinstance(overrides, Mapping):
+        raise ConfigError(located("overrides", "", f"a mapping, got {shown(overrides)}"))
+    return _merge(cfg, dict(overrides), "overrides", "").validate("overrides")
 
 
 def _outside_world(key: str, value: Any) -> str | None:

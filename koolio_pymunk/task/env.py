@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import copy
 import math
 from pathlib import Path
 from typing import Any
@@ -13,7 +12,7 @@ from gymnasium import spaces
 
 from ..sensing.memory import Memory
 from ..sensing.suite import Readings, SensorSuite
-from ..store.config import Config, apply_world, load_config, state_fields
+from ..store.config import Config, apply_world, as_config, state_fields
 from ..store.errors import ConfigError
 from ..store.keyword import KeywordLayout
 from ..store.realism_config import Randomizer, RealismConfig, motion_on
@@ -21,6 +20,7 @@ from ..store.worlds import world_name
 from ..world.arena import Arena, Point, load_arena
 from ..world.motion_errors import MotionErrors
 from ..world.physics import ACTION_NAMES, Action, World
+from .action_rules import barred
 from .end_zones import EndZones
 from .rescue import rescue_robot, wants_rescue
 from .rules import TERMS, Judgement, judge
@@ -44,9 +44,28 @@ class KoolioEnv(gym.Env):
     a start point. Units are inches. ``goal`` makes another of its goals the active one;
     ``goal="random"`` draws one per episode (the cameras see only its plate).
 
+    **Configuration.** ``config`` is a :class:`~koolio_pymunk.store.config.Config`, a dict
+    laid over the defaults as a configuration file's sections are (``{"learner":
+    {"no_undo": True}}``), a shipped profile's name (``"paper"``) or a YAML file; None is
+    the defaults. It is copied, never changed. ``overrides``, a dict of the same form, is
+    laid over it: ``gym.make("koolio_pymunk/HallwayPaper-v0", overrides={...})`` keeps
+    the id's profile, where ``config=`` would replace it. An unknown key or a bad value is
+    refused with one line naming it (``ConfigError``: ``config: learner.alpah: unknown key
+    (did you mean 'alpha'?)``). The registered ids (:mod:`koolio_pymunk.task.registry`,
+    docs/envs.md) are arenas, worlds and profiles of these arguments.
+
     **Action space** ``Discrete(5)``: 0 Stop, 1 RotateLeft (+``rotate_action_arc_deg``),
-    2 RotateRight, 3 Forward, 4 Reverse (``move_action_distance``). pymunk resolves every
-    move against the walls.
+    2 RotateRight, 3 Forward, 4 Reverse (``move_action_distance``); :attr:`action_names`
+    names them. pymunk resolves every move against the walls. Every action may be taken;
+    ``info["action_mask"]`` says which ones the project's learners would choose among.
+
+    **Action mask** (``info["action_mask"]``, :meth:`action_masks`: int8, one per action).
+    With ``learner.no_undo`` (the no-undo rule, :mod:`koolio_pymunk.task.action_rules`) the
+    action that undoes the last one is 0: RotateRight after RotateLeft and back, Reverse
+    after Forward and back. All ones without the rule, after a reset and after a rescue
+    (the first action of an episode and the first after a rescue are free). The env
+    enforces nothing: a learner that follows the mask chooses among the actions
+    ``koolio-pm train``'s learner chooses among.
 
     **Observation space** ``MultiDiscrete``: the encoded readings in keyword order. With
     the paper's sensors, 12 values: goal distance seen by the front, left and right cameras
@@ -55,7 +74,10 @@ class KoolioEnv(gym.Env):
     averaged, 7; 0 Bump < 6 in, 1 Close < 24, 2 Medium < 60, 3 Far); int64. With
     ``sensors.compass.in_state`` the compass follows, and with ``sensors.memory`` the
     memory fields (:attr:`codes`; e.g. ``paper-memory``: the camera that last saw the
-    goal, 0-3, and the previous action, 0-5: 14 values).
+    goal, 0-3, and the previous action, 0-5: 14 values). With ``observe_goal=True`` one more
+    value ends it: the active goal's index in :attr:`goal_names` (as many levels as the
+    arena has goals; the paper's robot does not see it, so it is off by default: the
+    project's learners never use it).
 
     **Rewards** (first that applies, values in ``Config.rewards``; the defaults: goal 100,
     end_of_world -100, bump -5, stop -5, reverse -10, turn -1, forward -0.5): goal (Stop
@@ -72,8 +94,8 @@ class KoolioEnv(gym.Env):
 
     **Step cap and** ``TimeLimit``. The cap belongs to the simulator's configuration:
     ``koolio-pm train``, ``eval`` and ``view`` drive the class directly, without
-    wrappers, and their logs record the truncations. The registered
-    ``koolio_pymunk/Hallway-v0`` also declares it, as Gymnasium does, with
+    wrappers, and their logs record the truncations. Every registered id
+    (``koolio_pymunk/Hallway-v0`` and the others) also declares it, as Gymnasium does, with
     ``max_episode_steps=1500``: ``gym.make`` wraps the env in ``TimeLimit`` and
     ``env.spec.max_episode_steps`` is 1500. Both caps then count the same steps and by
     default end the episode on the same step, with the same ``truncated``; when they
@@ -86,7 +108,11 @@ class KoolioEnv(gym.Env):
     (random reverses, random spin) after the step's reward is found and its Q update made
     (paper §5.4.8: the update bootstraps from the state the action led to); the
     observation returned is the one after the rescue and the step's reward stays the Bump
-    reward. :meth:`rescue` forces one.
+    reward. ``info["observation_before_rescue"]`` is the observation the action led to,
+    before the rescue: a learner that follows the paper updates from it and chooses its
+    next action from the returned one. The key is in every ``info``, equal to the
+    observation when no rescue happened (after a reset too), so every ``info`` has the
+    same keys with the same types and vector envs stack it. :meth:`rescue` forces one.
 
     **info** (the same keys, each with one type, after ``reset`` and after every step, so
     vector envs can stack them through staggered autoresets): ``pose`` (tuple of 3 floats:
@@ -96,7 +122,10 @@ class KoolioEnv(gym.Env):
     after ``reset``), ``event`` (str: the winning reward rule; ``"reset"`` after
     ``reset``), ``rescued`` and ``has_been_rescued`` (bool), ``reward_terms`` (dict of the
     seven named terms, floats; all 0.0 after ``reset``), ``steps`` and ``bumps`` (int),
-    ``goal`` (str: the active goal's name).
+    ``goal`` (str: the active goal's name), ``goal_index`` (int: its index in
+    :attr:`goal_names`, the arena file's order; with ``goal="random"`` the door drawn for
+    this episode), ``action_mask`` (int8 array of 5, above), ``observation_before_rescue``
+    (int64 array like the observation, above).
 
     **Rendering.** ``render_mode`` is ``None``, ``"human"`` (a window) or ``"rgb_array"``
     (the window's picture as an array); any other value is refused with ``ValueError``.
@@ -124,21 +153,26 @@ class KoolioEnv(gym.Env):
     """
 
     metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 30}
+    action_names: tuple[str, ...] = ACTION_NAMES
+    """The actions by index (``Discrete(5)``): Stop, RotateLeft, RotateRight, Forward,
+    Reverse (``world.physics.ACTION_NAMES``)."""
 
     def __init__(
         self,
         arena: str | Path | Arena = "hallway",
-        config: Config | str | Path | None = None,
+        config: Config | dict[str, Any] | str | Path | None = None,
         goal: str | None = None,
         render_mode: str | None = None,
         max_steps: int | None = None,
         world: str | Path | None = None,
+        observe_goal: bool = False,
+        overrides: dict[str, Any] | None = None,
     ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             modes = ", ".join(repr(m) for m in self.metadata["render_modes"])
             raise ValueError(f"render_mode: {render_mode!r} is not one of None, {modes}")
         # A configuration passed in is copied, never changed (``max_steps``, ``world``).
-        own = copy.deepcopy(config) if isinstance(config, Config) else load_config(config)
+        own = as_config(config, overrides)
         cfg = apply_world(own, world) if world is not None else own
         self.world_name = world_name(cfg, world, own.realism)
         """The world the env runs in, however its realism was turned on: ``ideal``, the
@@ -159,6 +193,8 @@ class KoolioEnv(gym.Env):
                 )
             self.arena = self.arena.with_active_goal(goal)
         self.random_goal = goal == "random"
+        self.observe_goal = bool(observe_goal)
+        """The observation ends with :attr:`goal_index` (``observe_goal=True``)."""
         self.world_arena = self.arena.to_world()
         self.world = World.from_arena(self.arena, radius)
         self.zones = EndZones(self.world_arena, radius)
@@ -189,7 +225,10 @@ class KoolioEnv(gym.Env):
         """What the robot remembers in its state (``sensors.memory``; off by default)."""
         self._memory_bits = self.layout.bits[len(self.sensors.levels) :]
         self.action_space = spaces.Discrete(len(ACTION_NAMES))
-        self.observation_space = spaces.MultiDiscrete([lv for _, lv in fields])
+        levels = [lv for _, lv in fields]
+        if self.observe_goal:
+            levels.append(len(self.arena.goals))
+        self.observation_space = spaces.MultiDiscrete(levels)
         self.render_mode = render_mode
         self._renderer: Any = None
         self.turn_arc = math.radians(self.config.actions.rotate_action_arc_deg)
@@ -197,6 +236,9 @@ class KoolioEnv(gym.Env):
         self.move_distance = self.config.actions.move_action_distance
         """Forward / Reverse move this many inches (``move_action_distance``)."""
         self.goal_name = self.world_arena.active_goal
+        self.goal_index = self.goal_names.index(self.goal_name)
+        """The active goal's index in :attr:`goal_names` (``info["goal_index"]``)."""
+        self._before_rescue: tuple[int, ...] | None = None
         self._reset_counters()
 
     # -- Gymnasium API ---------------------------------------------------------------
@@ -213,7 +255,8 @@ class KoolioEnv(gym.Env):
         self.reset_key(options)
         if self.render_mode == "human":
             self.render()
-        return self._obs(), self._info()
+        obs = self._obs()
+        return obs, self._info(obs)
 
     def step(self, action: int) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """One step (class doc). An action outside ``Discrete(5)`` (e.g. 7, or 2.7) is
@@ -223,7 +266,21 @@ class KoolioEnv(gym.Env):
         _, reward, terminated, truncated = self.transition(int(action))
         if self.render_mode == "human":
             self.render()
-        return self._obs(), reward, terminated, truncated, self._info()
+        obs = self._obs()
+        return obs, reward, terminated, truncated, self._info(obs)
+
+    def action_masks(self) -> np.ndarray:
+        """``info["action_mask"]`` now: 1 for each action the no-undo rule
+        (``learner.no_undo``) allows after the last action, int8. All ones without the
+        rule, after a reset and after a rescue (the robot was moved: its next action undoes
+        nothing); with it, the last action's undo is 0 (:mod:`.action_rules`). The name is
+        the one sb3-contrib's ``MaskablePPO`` calls."""
+        mask = np.ones(len(ACTION_NAMES), dtype=np.int8)
+        if self.config.learner.no_undo and not self.rescued and self.last_action is not None:
+            bar = barred(self.last_action)
+            if bar >= 0:
+                mask[bar] = 0
+        return mask
 
     def check_options(self, options: dict[str, Any] | None) -> None:
         """``reset``'s options (and ``reset_key``'s, whose callers check them here):
@@ -382,12 +439,14 @@ class KoolioEnv(gym.Env):
         self.steps, self.bumps, self.episode_reward = counters
         self.has_been_rescued, self.rescued = rescued
         self._check_rescue = False
+        self._before_rescue = None  # not known: ``info`` gives the observation itself
         self.sensors.forget_last()
 
     def rescue(self) -> tuple[np.ndarray, dict[str, Any]]:
         """Force ``Rescue_Robot`` now (the viewer's Rescue button)."""
         self._rescue()
-        return self._obs(), self._info()
+        obs = self._obs()
+        return obs, self._info(obs)
 
     # -- internals ---------------------------------------------------------------------
     def set_goal(self, name: str) -> None:
@@ -395,6 +454,12 @@ class KoolioEnv(gym.Env):
         self.world_arena = self.world_arena.with_active_goal(name)
         self.sensors.set_goal(self.world_arena.goal().at, self._other_plates())
         self.goal_name = name
+        self.goal_index = self.goal_names.index(name)
+
+    @property
+    def goal_names(self) -> list[str]:
+        """The arena's goals in its file's order: ``info["goal_index"]`` indexes it."""
+        return self.world_arena.goal_names()
 
     def _other_plates(self) -> list[Point]:
         """The plates of every goal but the active one (a misread takes one for it)."""
@@ -420,6 +485,7 @@ class KoolioEnv(gym.Env):
             self.world.drive(0, 0.0, -motion.turn(self.turn_arc, rng))
 
     def _rescue(self) -> None:
+        self._before_rescue = self.codes  # ``info["observation_before_rescue"]``
         rescue_robot(self.world, 0, self.config.rescue, self.move_distance, self.np_random)
         self._sense()
         self.rescued = True
@@ -458,12 +524,18 @@ class KoolioEnv(gym.Env):
         the memory's codes when it is on."""
         return self.sensors.last()[1] + self.memory.codes
 
-    def _obs(self) -> np.ndarray:
-        return np.array(self.codes, dtype=np.int64)
+    def _obs(self, codes: tuple[int, ...] | None = None) -> np.ndarray:
+        """The observation of ``codes`` (the state now by default), with the goal's index
+        when :attr:`observe_goal` is on."""
+        codes = self.codes if codes is None else codes
+        if self.observe_goal:
+            codes = (*codes, self.goal_index)
+        return np.array(codes, dtype=np.int64)
 
-    def _info(self) -> dict[str, Any]:
+    def _info(self, obs: np.ndarray) -> dict[str, Any]:
         r = self.readings
         j = self.judgement
+        rescued = self.rescued and self._before_rescue is not None
         return {
             "pose": self.world.pose(0),
             "sonar": r.sonar.tolist(),
@@ -479,4 +551,7 @@ class KoolioEnv(gym.Env):
             "steps": self.steps,
             "bumps": self.bumps,
             "goal": self.goal_name,
+            "goal_index": self.goal_index,
+            "action_mask": self.action_masks(),
+            "observation_before_rescue": self._obs(self._before_rescue) if rescued else obs.copy(),
         }

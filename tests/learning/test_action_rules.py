@@ -6,11 +6,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from koolio_pymunk.learning.action_rules import NONE, UNDO, barred
 from koolio_pymunk.learning.algorithms import make_learner
 from koolio_pymunk.learning.episodes import Episodes
 from koolio_pymunk.learning.qtable import KeywordLayout, QTable
 from koolio_pymunk.store.config import LearnerConfig, load_config
+from koolio_pymunk.task.action_rules import NONE, UNDO, barred
 from koolio_pymunk.task.env import KoolioEnv
 
 LEFT, RIGHT, FORWARD, REVERSE = 1, 2, 3, 4

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from koolio_pymunk.learning.action_rules import allowed
+from koolio_pymunk.task.action_rules import allowed
 from koolio_pymunk.learning.evaluation import evaluate
 from koolio_pymunk.learning.qlearning import QLearner
 from koolio_pymunk.learning.qtable import QTableStore, load_qtable

@@ -442,3 +442,149 @@ def test_a_rendered_env_pickles_without_its_window() -> None:
     twin = pickle.loads(pickle.dumps(env))
     assert twin._renderer is None and env._renderer is not None
     assert np.array_equal(twin.render(), picture)
+
+
+# -- what the project's learners know, in info (issue 33) -------------------------------
+
+
+def rescuing_config(no_undo: bool = True, chance: float = 0.5) -> Config:
+    """Rescues early and often, and the no-undo rule on: the cases of the mask."""
+    cfg = Config()
+    cfg.learner.no_undo = no_undo
+    cfg.rescue.max_steps_before_rescue = 0
+    cfg.rescue.rescue_chance = chance
+    return cfg
+
+
+def test_the_action_names_are_the_worlds() -> None:
+    env = gym.make("koolio_pymunk/Room-v0")
+    names = env.unwrapped.action_names
+    assert names == ("Stop", "RotateLeft", "RotateRight", "Forward", "Reverse")
+    assert len(names) == env.action_space.n
+    assert [names[a] for a in Action] == [a.name.title().replace("_", "") for a in Action]
+
+
+def test_the_action_mask_bars_the_last_actions_undo_under_the_rule_only() -> None:
+    on = KoolioEnv("hallway", config={"learner": {"no_undo": True}})
+    off = KoolioEnv("hallway")
+    for env in (on, off):
+        _, info = env.reset(seed=0)
+        assert info["action_mask"].dtype == np.int8 and info["action_mask"].shape == (5,)
+        assert info["action_mask"].tolist() == [1] * 5
+    undo = {0: [1, 1, 1, 1, 1], 1: [1, 1, 0, 1, 1], 2: [1, 0, 1, 1, 1], 3: [1, 1, 1, 1, 0]}
+    undo[4] = [1, 1, 1, 0, 1]
+    for action in (1, 2, 0, 3, 4, 1, 1):
+        info = on.step(action)[4]
+        assert info["action_mask"].tolist() == undo[action], action
+        assert np.array_equal(on.action_masks(), info["action_mask"])
+        assert off.step(action)[4]["action_mask"].tolist() == [1] * 5
+
+
+def test_the_mask_after_a_rescue_is_all_ones() -> None:
+    env = KoolioEnv("hallway", config=rescuing_config(chance=1.0))
+    env.reset(seed=0)
+    env.world.place(0, (400.0, 11.0), -math.pi / 2)  # touching the south wall
+    info = env.step(int(Action.FORWARD))[4]
+    assert info["rescued"] and info["action_mask"].tolist() == [1] * 5
+    env.reset(seed=0)
+    info = env.step(int(Action.FORWARD))[4]
+    assert not info["rescued"] and info["action_mask"].tolist() == [1, 1, 1, 1, 0]
+    _, info = env.rescue()  # forced (the window's button)
+    assert info["action_mask"].tolist() == [1] * 5
+
+
+@pytest.mark.parametrize("no_undo", [True, False])
+def test_the_mask_allows_exactly_what_the_learner_may_choose(no_undo: bool) -> None:
+    """The env's mask against ``QLearner``'s own rule, step by step through episodes
+    with auto rescues (where the learner's ``relocated`` frees the next action)."""
+    from koolio_pymunk.learning.episodes import Episodes
+    from koolio_pymunk.learning.qlearning import QLearner
+    from koolio_pymunk.learning.qtable import QTable
+    from koolio_pymunk.task.action_rules import allowed
+
+    cfg = rescuing_config(no_undo)
+    cfg.episode.max_steps = 60
+    env = KoolioEnv("hallway", config=cfg)
+    agent = QLearner(QTable(env.layout), env.config.learner, None)
+    episodes = Episodes(env, agent, seed=0)
+    checked = rescues = barred = 0
+    for episode in range(8):
+        episodes.begin(episode)
+        while True:
+            mask = env.action_masks()
+            assert [a for a in range(5) if mask[a]] == allowed(5, agent.bar)
+            barred += int(mask.sum() == 4)
+            checked += 1
+            if episodes.step() is not None:
+                break
+            rescues += env.rescued
+    assert checked > 300 and rescues > 10  # the premise: many steps, many rescues
+    assert (barred > 200) == no_undo
+
+
+def test_the_observation_before_a_rescue_is_where_the_action_led() -> None:
+    """Two envs, one rescuing: the step's observation before the rescue is the plain
+    env's observation, the state the Q update bootstraps from; the returned one is the
+    rescued robot's."""
+    envs = []
+    for chance in (1.0, 0.0):
+        env = KoolioEnv("hallway", config=rescuing_config(chance=chance))
+        env.reset(seed=3)
+        env.world.place(0, (400.0, 11.0), -math.pi / 2)  # touching the south wall
+        envs.append(env)
+    rescued, plain = envs
+    obs, _, _, _, info = rescued.step(int(Action.FORWARD))
+    plain_obs, _, _, _, plain_info = plain.step(int(Action.FORWARD))
+    assert info["rescued"] and not plain_info["rescued"]
+    before = info["observation_before_rescue"]
+    assert before.dtype == np.int64 and before.shape == obs.shape
+    np.testing.assert_array_equal(before, plain_obs)
+    assert info["pose"] != plain_info["pose"]  # the rescue moved the robot ...
+    assert not np.array_equal(obs, before)  # ... and it reads something else there
+    assert rescued.layout.state_key(tuple(before)) == plain.state_key  # the update's next state
+    np.testing.assert_array_equal(plain_info["observation_before_rescue"], plain_obs)
+    assert plain_info["observation_before_rescue"] is not plain_obs  # a copy, not the same array
+    reset_obs, reset_info = rescued.reset(seed=3)
+    np.testing.assert_array_equal(reset_info["observation_before_rescue"], reset_obs)
+
+
+def test_the_goal_door_is_in_info_and_optionally_in_the_observation() -> None:
+    plain = KoolioEnv("hallway", goal="random")
+    seen = set()
+    for seed in range(60):
+        _, info = plain.reset(seed=seed)
+        assert plain.goal_names[info["goal_index"]] == info["goal"]
+        seen.add(info["goal_index"])
+    assert seen == set(range(len(plain.goal_names)))  # every door drawn
+    assert plain.observation_space.shape == (12,)
+    seeing = KoolioEnv("hallway", goal="random", observe_goal=True)
+    n = len(seeing.goal_names)
+    assert seeing.observation_space == gym.spaces.MultiDiscrete([3] * 6 + [4] * 6 + [n])
+    for seed in range(5):
+        obs, info = seeing.reset(seed=seed)
+        reference = plain.reset(seed=seed)[0]
+        assert obs[-1] == info["goal_index"] and np.array_equal(obs[:-1], reference)
+        obs, *_, info = seeing.step(3)
+        assert obs[-1] == info["goal_index"] == info["observation_before_rescue"][-1]
+    obs, info = seeing.reset(seed=0, options={"goal": "302"})
+    assert obs[-1] == info["goal_index"] == seeing.goal_names.index("302")
+    check_env(seeing, skip_render_check=True)
+    fixed = gym.make("koolio_pymunk/Room-v0", observe_goal=True)
+    assert fixed.reset(seed=0)[0][-1] == 0 and fixed.observation_space.nvec[-1] == 1
+
+
+def test_the_new_keys_change_no_draw() -> None:
+    """Building ``info`` draws nothing: the same seed and actions give the same
+    generator state as the learners' fast path (``reset_key`` / ``transition``)."""
+    cfg = rescuing_config()
+    fast, full = KoolioEnv("hallway", config=cfg), KoolioEnv("hallway", config=cfg)
+    fast.reset(seed=5)
+    fast.reset_key()
+    full.reset(seed=5)
+    full.reset()
+    for a in [3, 3, 1, 3, 3, 4, 2, 3, 3, 3] * 5:
+        key = fast.transition(a)[0]
+        info = full.step(a)[4]
+        assert full.layout.state_key(tuple(info["observation_before_rescue"])) == key
+    assert fast.np_random.bit_generator.state == full.np_random.bit_generator.state
+    assert fast.world.pose(0) == full.world.pose(0) and full.has_been_rescued

@@ -272,3 +272,32 @@ def test_the_compiled_vector_env_renders_each_env():
         assert len(frames) == 2 and frames[0].dtype == np.uint8 and frames[0].ndim == 3
     finally:
         venv.close()
+
+
+def test_the_learners_keys_stack_in_vector_envs_of_any_id():
+    """``action_mask``, ``observation_before_rescue`` and ``goal_index`` are in every
+    ``info`` with one dtype and shape, so both vector modes stack them, through
+    autoresets; a configuration given as a dict reaches the async workers (and the
+    compiled vector env gives the same keys)."""
+    kwargs = {"max_steps": 4, "config": {"learner": {"no_undo": True}}, "observe_goal": True}
+    for mode in ("sync", "async", "vector_entry_point"):
+        venv = gym.make_vec(
+            "koolio_pymunk/HallwayAnyDoor-v0", num_envs=2, vectorization_mode=mode, **kwargs
+        )
+        try:
+            obs, info = venv.reset(seed=[0, 1])
+            assert info["action_mask"].dtype == np.int8 and info["action_mask"].shape == (2, 5)
+            assert info["action_mask"].tolist() == [[1] * 5] * 2
+            np.testing.assert_array_equal(info["observation_before_rescue"], obs)
+            for _ in range(5):  # the 5th step autoresets both
+                obs, *_, info = venv.step(np.array([1, 3]))
+                assert info["observation_before_rescue"].shape == obs.shape == (2, 13)
+                assert info["goal_index"].dtype == np.int64
+                np.testing.assert_array_equal(obs[:, -1], info["goal_index"])
+            assert list(info["event"]) == ["reset", "reset"]
+            masks = info["action_mask"].tolist()
+            assert masks == [[1] * 5] * 2
+            _, _, _, _, info = venv.step(np.array([1, 3]))
+            assert info["action_mask"].tolist() == [[1, 1, 0, 1, 1], [1, 1, 1, 1, 0]]
+        finally:
+            venv.close()

@@ -6,7 +6,9 @@ taken: no RotateRight right after RotateLeft (and back), no Reverse right after 
 the first after an auto rescue (which moved the robot), are free. The rule holds for the
 greedy choice and for the exploratory one alike, in training, in every evaluation, in
 the window and on the robot (``robot_runtime.py`` repeats it), so a table is always read
-the way it was learned.
+the way it was learned. It lives on the task floor so that the env can say it too: its
+``info["action_mask"]`` (:meth:`~koolio_pymunk.task.env.KoolioEnv.action_masks`) allows
+what a learner under the rule may choose, for learners outside the package.
 
 Why: the hallway's 27-bit state aliases. Facing the south wall the robot is in the
 hallway's most common state, whose best action (RotateRight, learned facing north) turns
@@ -17,6 +19,11 @@ split every state in six and multiply the states to visit). Not in the paper (it
 learner chooses among all five actions).
 
 Not a change of the update: Table 11's ``max(NextQ)`` still runs over all five actions.
+
+:func:`barred` and :func:`allowed_action` are plain Python that numba also compiles into
+the step engine (:mod:`koolio_pymunk.learning.table_kernel`): this module is one of the
+kernels' sources, and changing it clears their cache
+(:mod:`koolio_pymunk.store.kernel_cache`).
 
 Draws: with one action barred, an exploratory (or unvisited state's) action is
 ``integers(0, 4)`` mapped over the four others in index order, and greedy ties are broken
