@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import pytest
 
-from koolio_pymunk.task.action_rules import allowed
 from koolio_pymunk.learning.evaluation import evaluate
 from koolio_pymunk.learning.qlearning import QLearner
 from koolio_pymunk.learning.qtable import QTableStore, load_qtable
 from koolio_pymunk.learning.training import train
 from koolio_pymunk.store.config import Config
 from koolio_pymunk.store.episode_log import LOG_FIELDS, log_rows
+from koolio_pymunk.task.action_rules import allowed
 from koolio_pymunk.task.env import KoolioEnv
 
 
