@@ -1,9 +1,9 @@
 """A tabular Q-learner from outside the package: Gymnasium's API and the env's info only.
 
-It learns as `koolio-pm train` does (Table 11, the default learner's settings, the update
-from info["observation_before_rescue"], then the next choice from the rescued robot's
-observation; only actions of info["action_mask"]), then scores its greedy policy as
-`koolio-pm eval` does (docs/envs.md):  python examples/tabular_q.py --id
+It learns as `koolio-pm train --config one-step-q` does (Table 11 with that profile's
+settings, the update from info["observation_before_rescue"], then the next choice from the
+rescued robot's observation; only actions of info["action_mask"]), then scores its greedy
+policy as `koolio-pm eval` does (docs/envs.md):  python examples/tabular_q.py --id
 koolio_pymunk/Room-v0 --episodes 300 [--no-undo]
 """
 
@@ -14,7 +14,7 @@ import numpy as np
 
 import koolio_pymunk  # noqa: F401  (registers the ids)
 
-ALPHA, GAMMA, Q_INIT = 0.2, 0.98, -30.0  # learner.alpha, gamma, q_init: the defaults
+ALPHA, GAMMA, Q_INIT = 0.2, 0.98, -30.0  # learner.alpha, gamma, q_init: one-step-q's
 
 
 def epsilon(episode: int) -> float:  # learner.epsilon: 0.15 -> 0.01 over 600 episodes
@@ -47,7 +47,7 @@ def episode(env: gym.Env, q: dict, eps: float, rng: np.random.Generator, learn: 
 def run(env_id: str, episodes: int, evals: int, seed: int, no_undo: bool, **kw) -> float:
     """Train for ``episodes``, then the greedy policy's goal rate over ``evals`` (``kw``:
     more of the env's arguments, e.g. ``max_steps``)."""
-    rule = {"overrides": {"learner": {"no_undo": True}}} if no_undo else {}
+    rule = {"overrides": {"learner": {"no_undo": no_undo}}}  # what info["action_mask"] says
     env = gym.make(env_id, **rule, **kw)
     q, rng = {}, np.random.default_rng(seed)
     env.reset(seed=seed)

@@ -1,6 +1,6 @@
 """examples/tabular_q.py, the outside tabular learner of docs/envs.md: with Gymnasium's
-API and the env's info alone it learns what ``koolio-pm train`` learns, with and without
-the no-undo rule."""
+API and the env's info alone it learns what ``koolio-pm train --config one-step-q``
+learns, with and without the no-undo rule."""
 
 from __future__ import annotations
 
@@ -37,9 +37,10 @@ def load_example() -> ModuleType:
 
 def train_rate(folder: Path, seed: int, no_undo: bool) -> float:
     """``koolio-pm train`` then ``koolio-pm eval --json``: the greedy goal rate."""
-    config = folder / "rule.yaml"
+    config = folder / "rule.yaml"  # the one-step-q profile, with or without the rule
     rule = str(no_undo).lower()
-    config.write_text(f"learner: {{no_undo: {rule}}}\nepisode: {{max_steps: {CAP}}}\n")
+    learner = "{algorithm: q, alpha: 0.2, epsilon: {start: 0.15, end: 0.01, decay_episodes: 600}"
+    config.write_text(f"learner: {learner}, no_undo: {rule}}}\nepisode: {{max_steps: {CAP}}}\n")
     table = str(folder / f"s{seed}-{no_undo}.qtable")
     common = ["--arena", "room", "--seed", str(seed), "--config", str(config), "--qtable", table]
     out = io.StringIO()

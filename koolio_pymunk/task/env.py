@@ -333,7 +333,7 @@ class KoolioEnv(gym.Env):
         included), with a world, sensors, memory and generator of its own: another robot
         of a batch (:class:`~koolio_pymunk.task.batch.EnvBatch`). No window."""
         goal = "random" if self.random_goal else None
-        other = KoolioEnv(self.arena, config=self.config, goal=goal)
+        other = KoolioEnv(self.arena, config=self.config, goal=goal, observe_goal=self.observe_goal)
         other.world_name = self.world_name
         if other.goal_name != self.goal_name:  # a reset option made another goal active
             other.set_goal(self.goal_name)

@@ -19,6 +19,7 @@ from gymnasium.vector.utils import batch_space
 from ..sensing.memory_kernel import FIELDS
 from ..sensing.reading_kernel import robot_group
 from ..store.kernel_cache import ensure_fresh
+from .action_rules import UNDO as UNDO_ACTIONS
 from .batch import EnvBatch
 from .env import NO_KEYWORD, RESET_EVENT, WRONG_DOOR, KoolioEnv
 from .rules import TERMS
@@ -44,6 +45,9 @@ RESET_CODE = -2
 #: Event names by code (:data:`~.step_kernel.EVENTS`, then ``wrong_door``), for ``info``.
 EVENT_NAMES = np.array([*EVENTS, WRONG_DOOR], dtype=object)
 
+#: The undo of each action (-1: none), as an array.
+UNDO = np.array(UNDO_ACTIONS, np.int64)
+
 
 @numba.njit(cache=True)
 def step_batch(
@@ -54,8 +58,8 @@ def step_batch(
     """``KoolioEnv.step(actions[r])`` (simulate, then the rescue check) for every env ``r``
     not in ``skip``, in index order, each drawing from its own generator. ``out`` =
     ``(rewards, terminated, truncated, events, keywords, codes before rescue, action
-    bits, TimeLimit's cap (0: none))``."""
-    rewards, terminated, truncated, events, keywords, before, action_bits, cap = out
+    bits, TimeLimit's cap (0: none), the memory's fields in the observation)``."""
+    rewards, terminated, truncated, events, keywords, before, action_bits, cap, fields = out
     for r in range(ints.shape[0]):
         if skip[r]:
             continue
@@ -65,7 +69,10 @@ def step_batch(
         rng = gens[r]
         _, code, reward, term, trunc = simulate_inline(r, a, rng, sense, world, motion, task,
                                                        memory, ints, floats, mem)  # fmt: skip
-        before[r, : sense[8].shape[0]] = sense[8]
+        n = sense[8].shape[0]
+        before[r, :n] = sense[8]  # the state the action led to: the reading, the memory
+        for k in range(fields.shape[0]):
+            before[r, n + k] = mem[r, fields[k]]
         rescue_check_inline(r, rng, sense, world, task, memory, ints, floats, mem)
         rewards[r] = reward
         terminated[r] = term
@@ -108,12 +115,16 @@ class KoolioVectorEnv(gym.vector.VectorEnv):
         max_steps: int | None = None,
         world: Any = None,
         max_episode_steps: int | None = None,
+        observe_goal: bool = False,
+        overrides: dict[str, Any] | None = None,
     ) -> None:
         if not isinstance(num_envs, int) or num_envs < 1:
             raise ValueError(f"num_envs: a whole number >= 1, got {num_envs!r}")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode: {render_mode!r} is not one of None, 'rgb_array'")
-        first = KoolioEnv(arena, config, goal, render_mode, max_steps, world)
+        first = KoolioEnv(
+            arena, config, goal, render_mode, max_steps, world, observe_goal, overrides
+        )
         envs = [first] + [first.sibling() for _ in range(num_envs - 1)]
         for env in envs[1:]:
             env.render_mode = render_mode
@@ -129,7 +140,9 @@ class KoolioVectorEnv(gym.vector.VectorEnv):
         """``TimeLimit``'s cap (0: none); the env's own is ``episode.max_steps``."""
         n = num_envs
         width = len(first.codes)
-        self._codes = np.zeros((n, width), np.int64)
+        self._codes = np.zeros((n, width + int(first.observe_goal)), np.int64)
+        self._last = np.full(n, -1, np.int64)
+        """Each env's last action (-1: none since its reset), for ``action_mask``."""
         self._out = (
             np.zeros(n),
             np.zeros(n, np.bool_),
@@ -139,6 +152,7 @@ class KoolioVectorEnv(gym.vector.VectorEnv):
             np.zeros((n, width), np.int64),  # the observation before a rescue
             int(first.layout.action_bits),
             self.max_episode_steps,
+            np.zeros(0, np.int64),  # the memory's fields: below
         )
         self._autoreset = np.zeros(n, np.bool_)
         self._n_sensor = len(first.sensors.levels)
@@ -151,6 +165,9 @@ class KoolioVectorEnv(gym.vector.VectorEnv):
             if flag and first.memory.on
         ]
         assert len(FIELDS) >= 4
+        self._out = (*self._out[:-1], np.array(self._memory_fields, np.int64))
+        self._no_undo = bool(first.config.learner.no_undo)
+        self._observe_goal = bool(first.observe_goal)
         self._n_sonar = first.sensors.n_sonar
         self._n_camera = first.sensors.n_camera
 
@@ -202,6 +219,7 @@ class KoolioVectorEnv(gym.vector.VectorEnv):
         terminated[resets] = False
         truncated[resets] = False
         self._autoreset = terminated | truncated
+        self._last = np.where(resets, -1, acts)
         ones = np.ones(self.num_envs, np.bool_)
         return (self._observations(), rewards.copy(), terminated.copy(), truncated.copy(),
                 self._info(ones))  # fmt: skip
@@ -222,6 +240,7 @@ class KoolioVectorEnv(gym.vector.VectorEnv):
     # -- internals ---------------------------------------------------------------------
     def _reset(self, r: int, seed: int | None, options: dict | None) -> None:
         self.batch.reset(r, seed, options)
+        self._last[r] = -1
         self._out[3][r] = RESET_CODE
         self._out[4][r] = NO_KEYWORD
 
@@ -232,7 +251,22 @@ class KoolioVectorEnv(gym.vector.VectorEnv):
         obs[:, : self._n_sensor] = rows[18]
         for k, field in enumerate(self._memory_fields):
             obs[:, self._n_sensor + k] = self.batch.mem[:, field]
+        if self._observe_goal:
+            obs[:, -1] = self._goal_index()
         return obs.copy()
+
+    def _goal_index(self) -> np.ndarray:
+        return np.array([env.goal_index for env in self.envs], np.int64)
+
+    def _action_mask(self, rescued: np.ndarray) -> np.ndarray:
+        """``KoolioEnv.action_masks`` of every env: the last action's undo barred under
+        the no-undo rule, none after a reset or a rescue."""
+        mask = np.ones((self.num_envs, self.single_action_space.n), np.int8)
+        if self._no_undo:
+            bar = UNDO[np.maximum(self._last, 0)]
+            on = (self._last >= 0) & ~rescued & (bar >= 0)
+            mask[np.flatnonzero(on), bar[on]] = 0
+        return mask
 
     def _info(self, mask: np.ndarray) -> dict[str, Any]:
         """The envs' ``info`` as vector envs give it: each key an array, with its mask."""
@@ -246,6 +280,11 @@ class KoolioVectorEnv(gym.vector.VectorEnv):
         rewards = self._out[0]
         judged = np.where(events == WRONG_DOOR_CODE, 0, events)
         terms = {t: np.where(~reset & (judged == i), rewards, 0.0) for i, t in enumerate(TERMS)}
+        rescued = b.ints[:, I_RESCUED].astype(np.bool_)
+        obs = self._observations()
+        before = obs.copy()
+        width = self._out[5].shape[1]
+        before[rescued, :width] = self._out[5][rescued]
         info: dict[str, Any] = {
             "pose": b.floats[:, [F_X, F_Y, F_H]].copy(),
             "sonar": out[:, :n_s].copy(),
@@ -255,12 +294,15 @@ class KoolioVectorEnv(gym.vector.VectorEnv):
             "state_key": b.ints[:, I_STATE].copy(),
             "keyword": self._out[4].copy(),
             "event": names,
-            "rescued": b.ints[:, I_RESCUED].astype(np.bool_),
+            "rescued": rescued,
             "has_been_rescued": b.ints[:, I_HAS_BEEN_RESCUED].astype(np.bool_),
             "reward_terms": {**terms, **{f"_{t}": mask.copy() for t in TERMS}},
             "steps": b.ints[:, I_STEPS].copy(),
             "bumps": b.ints[:, I_BUMPS].copy(),
             "goal": np.array([env.goal_name for env in self.envs], dtype=object),
+            "goal_index": self._goal_index(),
+            "action_mask": self._action_mask(rescued),
+            "observation_before_rescue": before,
         }
         for key in list(info):
             if not key.startswith("_"):

@@ -466,7 +466,7 @@ def test_the_action_names_are_the_worlds() -> None:
 
 def test_the_action_mask_bars_the_last_actions_undo_under_the_rule_only() -> None:
     on = KoolioEnv("hallway", config={"learner": {"no_undo": True}})
-    off = KoolioEnv("hallway")
+    off = KoolioEnv("hallway", config={"learner": {"no_undo": False}})
     for env in (on, off):
         _, info = env.reset(seed=0)
         assert info["action_mask"].dtype == np.int8 and info["action_mask"].shape == (5,)

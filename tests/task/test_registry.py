@@ -39,7 +39,7 @@ def test_every_shipped_arena_world_and_profile_has_an_id() -> None:
     assert worlds == set(world_names())
     assert profiles == set(profile_names()) - set(world_names())
     assert any(r.get("goal") == "random" for r in rows)
-    assert len(IDS) == len(set(IDS)) == 10
+    assert len(IDS) == len(set(IDS)) == 11
 
 
 def test_the_first_id_keeps_its_registration() -> None:
