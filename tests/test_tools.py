@@ -1,6 +1,7 @@
 """tools/irsim_compare.py without ir-sim (not a dependency, not installed in CI): the one
 line saying how to install it and exit 2, the world file it writes for IR-SIM, and
-bench.py's IR-SIM row skipped with a note. Its timings are never asserted.
+bench.py's IR-SIM row skipped with a note, and every section of bench.py run on tiny
+budgets. Its timings are never asserted.
 
 The subprocess's import system cannot find ``irsim`` (a finder first in
 ``sys.meta_path`` raises ``ModuleNotFoundError`` for it, as an interpreter without it
@@ -13,6 +14,7 @@ import contextlib
 import doctest
 import importlib
 import io
+import json
 import subprocess
 import sys
 import textwrap
@@ -125,6 +127,35 @@ def test_bench_skips_its_irsim_row_with_a_note(tools, tmp_path: Path) -> None:
         "  IR-SIM row skipped: tools/irsim_compare.py: ir-sim is not installed: "
         "pip install -e '.[compare]'\n"
     )
+
+
+def test_bench_runs_every_section_on_tiny_budgets(tools, tmp_path: Path) -> None:
+    """``tools/bench.py --quick --scale 0.02``: every section but ``baseline`` (which needs
+    an earlier checkout) runs and writes its rows; the figures themselves are not
+    asserted."""
+    _, bench = tools
+    out = tmp_path / "bench.json"
+    args = ["--quick", "--scale", "0.02", "--seeds", "0", "--max-episodes", "25",
+            "--robots", "4", "--out", str(out)]  # fmt: skip
+    with contextlib.redirect_stdout(io.StringIO()) as printed:
+        assert bench.main(args) == 0
+    report = json.loads(out.read_text())
+    ran = set(report["section_seconds"])
+    assert ran == set(bench.SECTIONS) - {"baseline"}
+    keys = ("one_robot", "koolio_real", "paper_memory", "train", "eval", "checks", "robots",
+            "vector", "motion", "algorithms", "step_costs", "competence", "profile",
+            "arena_check", "agreement_sample")  # fmt: skip
+    assert set(keys) <= set(report)
+    assert report["one_robot"]["engine"]["compiled"]
+    assert not report["one_robot"]["python_loop"]["compiled"]
+    assert set(report["train"]) == {"fsync_second", "fsync_episode", "save_every_100",
+                                    "fsync_episode_save_every_100"}  # fmt: skip
+    assert report["vector"]["compiled"]["class_name"] == "KoolioVectorEnv"
+    assert report["vector"]["sync"]["class_name"] == "SyncVectorEnv"
+    assert report["checks"]["checks"] >= 1
+    assert set(report["competence"]) == {"default", "one-step-q"}
+    assert "engine.run" in " ".join(report["robots"]["where"]["parts"])
+    assert "IR-SIM row skipped" in printed.getvalue()
 
 
 def test_learning_targets_refuses_a_bad_setting_in_one_line(tmp_path: Path) -> None:

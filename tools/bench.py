@@ -1,61 +1,80 @@
 """koolio-pymunk's speed benchmark: steps/s, time to competence, memory, where time goes.
 
-Sections (each printed as a table row, all written to ``--out`` as JSON):
+Every episode, one robot or many, training or evaluation, runs on one compiled step engine
+(``learning/engine.py`` over ``task/step_kernel.py``); its Python reference is the loop
+of ``learning/episodes.py`` (``compiled=False``). Sections, in the order they run (each
+prints its rows; all go to ``--out`` as JSON; ``--only NAME ...`` runs some of them):
 
-* **reference / fast**: the single-robot training loop (epsilon-greedy, Q update, same
-  code as ``koolio-pm train``) on the hallway with the pymunk reference sensors (the
-  Python episode loop) and with the fast backend, without file I/O: the fast row is the
-  compiled episode (``learning/episode_kernel.py``, what ``train`` runs), the next row
-  the same fast backend in the Python episode loop, with the compiled/Python ratio;
-  steps per second, and the fast/reference ratio;
-* **koolio-real**: the same compiled loop in the realistic world (``--world
-  koolio-real``: every realism model on), next to the ideal world's row above: steps per
-  second and the ratio to the ideal world; then the same world with one family of its
-  models off (:func:`realism_without`: the motion errors; the sonar's beam model), which
-  says where its extra cost per step goes;
-* **paper-memory**: the compiled loop and the Python loop with ``--config paper-memory``
-  (the goal camera and the last action remembered in the state);
-* **train (end to end)**: :func:`training.train` as ``koolio-pm train`` runs it (the
-  compiled episode), saving the table (the file written and fsynced, the replaced one
-  kept as the backup) and the log at every episode end, then with ``save_every`` 100
-  (``--save-every 100``);
-* **IR-SIM, same run**: IR-SIM (``ir-sim``, the ``compare`` extra) stepping the same
-  hallway with an 88-beam lidar (``tools/irsim_compare.py``, collision mode ``stop``), and
-  the end-to-end row's ratio to it; skipped with a note when ir-sim is not installed;
-* **N robots**: ``learning.fleet.train_many`` with ``--robots`` robots, robot-steps per
-  second;
-* **motion**: the cost of one 12-inch move from the same seeded random free poses of the
+* ``one-robot``: one robot learning in the hallway, without file I/O: the Python loop on
+  the pymunk reference sensors (``reference``), the engine (what ``koolio-pm train``
+  runs) and the Python loop on the same fast backend, with the default learner (Q(lambda)
+  and the no-undo rule) and with ``--config one-step-q`` (one-step Q, all five actions);
+  steps per second and the ratios;
+* ``koolio-real``: the engine in the realistic world (``--world koolio-real``: every
+  realism model on) and its ratio to the ideal world; then the same world with one family
+  of its models off (:func:`realism_without`: the motion errors; the sonar's beam model),
+  which says where its extra cost per step goes;
+* ``paper-memory``: the engine and the Python loop with ``--config paper-memory`` (the
+  paper's learner; the goal camera and the last action remembered in the state);
+* ``train``: :func:`training.train` as ``koolio-pm train`` runs it, end to end (the table
+  and the log written): ``--fsync second`` (the default: the table written whole at most
+  once a second, each episode's changes to its journal), ``--fsync episode`` (the paper's
+  rule: written and fsynced at every episode end) and ``--save-every 100`` with each; then
+  IR-SIM (``ir-sim``, the ``compare`` extra) stepping the same hallway with an 88-beam
+  lidar (``tools/irsim_compare.py``, collision mode ``stop``) and the default row's ratio
+  to it, skipped with a note when ir-sim is not installed;
+* ``eval``: :func:`evaluation.evaluate` (``koolio-pm eval``, the checks of ``train
+  --eval-every``), greedy, of a table trained for 300 episodes: on the engine with one
+  robot (what ``eval`` runs), with 64 robots, and in the Python loop; episodes and steps
+  per second;
+* ``checks``: ``koolio-pm train --episodes 3000 --eval-every 100``: the share of the run
+  spent in its checks (:class:`~koolio_pymunk.learning.evaluation.PeriodicCheck`, timed
+  around each check; and the seconds ``train`` writes in the evaluations file);
+* ``robots``: ``koolio-pm train --robots 64`` end to end, robot-steps per second: with
+  ``--config one-step-q``, with the default learner, and with the default learner in
+  ``--world koolio-real``; then where a robot-step's time goes (CPU timers around the
+  compiled steps and the Python between episodes, :func:`many_where`) and a cProfile of
+  the same run;
+* ``vector``: ``gymnasium.make_vec("koolio_pymunk/Hallway-v0", num_envs=64)`` (the
+  compiled vector env, ``task/vector_env.py``) stepped with random actions, against
+  Gymnasium's ``SyncVectorEnv`` of 64 ``KoolioEnv`` (``vectorization_mode="sync"``);
+  env-steps per second;
+* ``motion``: the cost of one 12-inch move from the same seeded random free poses of the
   hallway (near a wall: within 12 in of one): the pymunk world's (``World.move``), the
   compiled move (``swept_move.move``) called from Python, and per move inside one
   compiled loop;
-* **algorithms**: the fast single-robot loop with each ``learner.algorithm`` (one-step Q
-  and Q(lambda) compiled and in the Python loop, Dyna-Q with its default
+* ``algorithms``: the engine with each ``learner.algorithm`` in the default configuration
+  (one-step Q and Q(lambda) on the engine and in the Python loop, Dyna-Q with its default
   ``planning_steps``, which runs the Python loop), the same number of steps from an empty
-  table in this one run: the cost per step and its ratio to compiled one-step Q's;
-* **time to competence**, per seed: default ``koolio-pm train`` (hallway, default
-  config), a greedy evaluation of 100 episodes after every ``--check-every`` episodes,
-  until at least 90 % reach the goal; each seed runs in its own process, which also
-  reports its own peak RSS (:func:`peak_rss_mib`) and its Q-table's size next to the
-  paper's dense 113.9 MiB;
-* **cost per step**: the compiled episode's step taken apart, each part timed in a
-  compiled loop over the same recorded poses (:func:`step_costs`), in the ideal world
-  and in ``koolio-real``;
-* **profile**: cProfile of the fast single-robot loop (compiled), top 10 functions by own
-  time;
-* **agreement**: fast vs reference sensing on a sample of random poses per arena
-  (``tools/agreement.py`` runs the full 100k);
-* **arena check**: validating an arena whose walls are a 5,000-point ring, and a
+  table in this one run: the cost per step and its ratio to the engine's one-step Q;
+* ``step-costs``: one step of the engine taken apart, each part timed in a compiled loop
+  over the same recorded poses (:func:`step_costs`, one-step Q), in the ideal world and
+  in ``koolio-real``;
+* ``competence``, per seed: ``koolio-pm train`` (hallway) with the default learner and
+  with ``--config one-step-q``, a greedy evaluation of 100 episodes after every
+  ``--check-every`` episodes, until at least 90 % reach the goal; each seed runs in its
+  own process, which also reports its own peak RSS (:func:`peak_rss_mib`) and its
+  Q-table's size next to the paper's dense 113.9 MiB;
+* ``profile``: cProfile of one robot learning on the engine, top 10 functions by own time;
+* ``arena-check``: validating an arena whose walls are a 5,000-point ring, and a
   5,000-point star (random radii, so that many edges' bounding boxes overlap), as
-  ``koolio-pm check-arena`` does after parsing (``docs/robustness.md``).
+  ``koolio-pm check-arena`` does after parsing (``docs/robustness.md``);
+* ``agreement``: fast vs reference sensing on a sample of random poses per arena
+  (``tools/agreement.py`` runs the full 100k);
+* ``baseline`` (only with ``--baseline DIR``, a checkout of an earlier commit whose
+  ``tools/bench.py`` has ``learning_loop`` and ``many``): the one-robot rows (the default
+  learner's settings, ``--config qlambda-no-undo`` in both trees, and one-step Q) and the
+  64-robot one-step Q row, each tree in its own process, alternately, and the ratios.
 
-Every rate is given twice: per wall-clock second and per CPU second of this process
+Every rate is given twice: per wall-clock second and per CPU second of the process
 (``time.process_time``). On an idle machine they agree; on a shared one other processes
 stretch wall time, and the CPU figure is the one to compare between runs.
 
-    .venv/bin/python tools/bench.py --out bench.json         # a few minutes
-    .venv/bin/python tools/bench.py --quick                   # about a minute
-    .venv/bin/python tools/bench.py --algorithms-only         # the algorithms section only
-    .venv/bin/python tools/bench.py --robots-only             # the N-robot row only
+    .venv/bin/python tools/bench.py --out bench.json         # about 15 minutes
+    .venv/bin/python tools/bench.py --quick                   # about 3 minutes
+    .venv/bin/python tools/bench.py --only robots vector      # some sections
+    .venv/bin/python tools/bench.py --quick --scale 0.02 --seeds 0 --max-episodes 50
+                                                              # every section, a smoke test
 """
 
 from __future__ import annotations
@@ -71,6 +90,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 if str(Path(__file__).resolve().parent) not in sys.path:  # the tools' own modules
@@ -80,19 +100,24 @@ from timing import Timer, rates
 
 ROOT = Path(__file__).resolve().parent.parent
 PAPER_DENSE_MIB = 113.9
+ENV_ID = "koolio_pymunk/Hallway-v0"
 
 
 def make_env(
     backend: str,
     arena: str = "hallway",
     world: str | None = None,
-    algorithm: str = "q",
+    algorithm: str | None = None,
     config: str | None = None,
 ):
+    """A hallway env of ``config`` (a profile name; None: the default), its sensors'
+    ``backend`` and, when given, its ``learner.algorithm``."""
     from koolio_pymunk.store.config import load_config
     from koolio_pymunk.task.env import KoolioEnv
 
-    overrides = {"sensors": {"backend": backend}, "learner": {"algorithm": algorithm}}
+    overrides: dict = {"sensors": {"backend": backend}}
+    if algorithm is not None:
+        overrides["learner"] = {"algorithm": algorithm}
     return KoolioEnv(arena, config=load_config(config, overrides=overrides, world=world))
 
 
@@ -101,43 +126,58 @@ def learning_loop(
     min_steps: int,
     seed: int = 0,
     world: str | None = None,
-    algorithm: str = "q",
+    algorithm: str | None = None,
     compiled: bool = True,
     config: str | None = None,
+    profiler: cProfile.Profile | None = None,
 ) -> dict:
-    """The training loop of ``train`` without file I/O, for at least ``min_steps`` steps
-    (``compiled`` False: the Python loop; True: the step engine where the configuration
-    allows, as ``train``)."""
+    """One robot learning as ``train`` does, without file I/O, for at least ``min_steps``
+    steps (``compiled`` False: the Python loop; True: the step engine where the
+    configuration allows, as ``train``); ``profiler`` runs during the timed steps."""
     from koolio_pymunk.learning.algorithms import make_learner
     from koolio_pymunk.learning.engine import robots
     from koolio_pymunk.learning.qtable import QTable
 
     def loop_of(env):
         table = QTable(env.layout, {}, env.config.learner.q_init)
-        return robots(env, [make_learner(table, env.config.learner, None)], seed,
-                      compiled=compiled)  # fmt: skip
+        return robots(env, [make_learner(table, env.config.learner, None)], seed, compiled=compiled)
 
     warm = loop_of(make_env(backend, world=world, algorithm=algorithm, config=config))
     warm.begin(0, 0)  # compile / warm up the kernels on a copy
     warm.advance()
     loop = loop_of(make_env(backend, world=world, algorithm=algorithm, config=config))
     steps, e = 0, 0
+    if profiler is not None:
+        profiler.enable()
     with Timer() as t:
         while steps < min_steps:
             loop.begin(0, e)
             loop.advance()
             steps += loop.result(0).steps
             e += 1
+    if profiler is not None:
+        profiler.disable()
     out = rates(steps, t)
     out["episodes"] = e
     out["compiled"] = loop.python_reason is None
     return out
 
 
+def ratio(a: dict, b: dict, key: str = "per_cpu_s", digits: int = 2) -> float:
+    """``a[key] / b[key]``, rounded."""
+    return round(a[key] / max(1e-9, b[key]), digits)
+
+
+def table_line(name: str, r: dict, extra: str = "") -> str:
+    return (
+        f"  {name:<44} {r['per_wall_s']:>10,} {r['per_cpu_s']:>10,}   "
+        f"{r['steps']:>9,} steps {r['cpu_s']:>7.2f} CPU s  {extra}"
+    )
+
+
 def algorithms(min_steps: int) -> dict:
-    """Each learning algorithm in the fast loop; cost per step and ratio to one-step Q
-    (compiled where it runs compiled; ``q-python``, ``qlambda-python``: in the Python
-    loop)."""
+    """Each learning algorithm in the default configuration; cost per step and ratio to
+    one-step Q on the engine (``q-python``, ``qlambda-python``: in the Python loop)."""
     out = {}
     for name in ("q", "q-python", "qlambda", "qlambda-python", "dyna"):
         algo = name.removesuffix("-python")
@@ -150,33 +190,20 @@ def algorithms(min_steps: int) -> dict:
     return out
 
 
-def algorithms_section(quick: bool) -> dict:
-    """Run and print the algorithms section."""
-    algos = algorithms(30_000 if quick else 150_000)
-    print("  cost per step of each learner.algorithm (fast loop, same steps, this run):")
-    for name, r in algos.items():
-        loop = "compiled" if r["compiled"] else "Python loop"
-        print(
-            f"    {name:<8} x{r['ratio_to_q_cpu']:.2f} one-step Q  "
-            f"{r['us_per_step_cpu']:6.1f} us/step  {r['per_cpu_s']:>8,} steps/CPU s  "
-            f"({r['steps']:,} steps, {r['episodes']} episodes, {loop})"
-        )
-    return algos
-
-
-def _write(report: dict, out: str | None) -> int:
-    if out:
-        Path(out).write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
-        print(f"wrote {out}")
-    return 0
-
-
-def end_to_end(episodes: int, folder: Path, save_every: int = 1) -> dict:
+def end_to_end(
+    episodes: int,
+    folder: Path,
+    save_every: int | None = None,
+    fsync: str = "second",
+    config: str | None = None,
+) -> dict:
+    """``koolio-pm train`` end to end, one robot (the table, its journal or backup, the
+    log): steps per second."""
     from koolio_pymunk.learning.qtable import QTableStore
     from koolio_pymunk.learning.training import train
 
-    env = make_env("fast")
-    name = f"e2e{save_every}"
+    env = make_env("fast", config=config)
+    name = f"e2e-{fsync}-{save_every}-{config}"
     with Timer() as t:
         res = train(
             env,
@@ -186,9 +213,10 @@ def end_to_end(episodes: int, folder: Path, save_every: int = 1) -> dict:
             folder / f"{name}.csv",
             report=None,
             save_every=save_every,
+            fsync=fsync,
         )
     out = rates(res.steps, t)
-    out.update(episodes=episodes, save_every=save_every)
+    out.update(episodes=episodes, save_every=save_every or 1, fsync=fsync, config=config)
     return out
 
 
@@ -211,10 +239,15 @@ def irsim_row(steps: int, e2e: dict, folder: Path) -> dict | None:
 
 
 def many(
-    robots: int, episodes: int, folder: Path, config: str | None = None, world: str | None = None
+    robots: int,
+    episodes: int,
+    folder: Path,
+    config: str | None = None,
+    world: str | None = None,
+    profiler: cProfile.Profile | None = None,
 ) -> dict:
     """``koolio-pm train --robots N`` end to end (the table saved every N episodes, the
-    log): robot-steps per second."""
+    log): robot-steps per second; ``profiler`` runs during the timed run."""
     from koolio_pymunk.learning.qtable import QTableStore
     from koolio_pymunk.learning.training import train
     from koolio_pymunk.store.config import load_config
@@ -223,22 +256,228 @@ def many(
     def env():
         return KoolioEnv("hallway", config=load_config(config, world=world))
 
-    tag = f"many-{config}-{world}".replace("/", "_")
+    tag = f"many-{robots}-{episodes}-{config}-{world}-{profiler is not None}".replace("/", "_")
     warm = QTableStore(folder / f"{tag}-warm.qtable")
-    train(env(), warm, 2, 0, None, report=None, robots=2)  # compile the kernels
+    train(env(), warm, 2, 0, None, report=None, robots=2)  # compile / load the kernels
+    first, store = env(), QTableStore(folder / f"{tag}.qtable")
+    if profiler is not None:
+        profiler.enable()
     with Timer() as t:
         res = train(
-            env(),
-            QTableStore(folder / f"{tag}.qtable"),
+            first,
+            store,
             episodes,
             0,
             folder / f"{tag}.csv",
             report=None,
             robots=robots,
         )
+    if profiler is not None:
+        profiler.disable()
     out = rates(res.steps, t)
-    out.update(robots=robots, episodes=episodes, states=len(res.table), config=config,
-               world=world)  # fmt: skip
+    out.update(robots=robots, episodes=episodes, states=len(res.table), config=config, world=world)
+    return out
+
+
+class CpuTimers:
+    """CPU seconds and calls of some functions while a block runs: each ``(owner,
+    name)`` attribute is replaced by a timed wrapper, and put back at the end."""
+
+    def __init__(self, targets: list[tuple[object, str, str]]) -> None:
+        self.targets = targets
+        self.cpu: dict[str, float] = {label: 0.0 for _, _, label in targets}
+        self.calls: dict[str, int] = {label: 0 for _, _, label in targets}
+        self._saved: list[tuple[object, str, object]] = []
+
+    def __enter__(self) -> CpuTimers:
+        for owner, name, label in self.targets:
+            original = getattr(owner, name)
+            self._saved.append((owner, name, original))
+            setattr(owner, name, self._wrap(original, label))
+        return self
+
+    def _wrap(self, fn: Callable, label: str) -> Callable:
+        cpu, calls, clock = self.cpu, self.calls, time.process_time
+
+        def timed(*args, **kwargs):
+            t0 = clock()
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                cpu[label] += clock() - t0
+                calls[label] += 1
+
+        return timed
+
+    def __exit__(self, *exc: object) -> None:
+        for owner, name, original in reversed(self._saved):
+            setattr(owner, name, original)
+
+
+def many_where(robots: int, episodes: int, folder: Path, config: str | None = None) -> dict:
+    """Where a robot-step of ``train --robots N`` goes: CPU timers around the engine's
+    compiled call (:func:`engine.run`, which returns at every finished episode) and the
+    Python between episodes (the episode start: the env seed's ``SeedSequence``, the two
+    generator states, one for the env and one for the learner, the env's reset and the
+    load into the arrays; the log row and the save), µs per robot-step and per episode."""
+    from koolio_pymunk.learning import engine, training
+    from koolio_pymunk.learning.qtable import QTableStore
+    from koolio_pymunk.store.config import load_config
+    from koolio_pymunk.task import batch
+    from koolio_pymunk.task.env import KoolioEnv
+
+    def env():
+        return KoolioEnv("hallway", config=load_config(config))
+
+    train = training.train
+    train(env(), QTableStore(folder / "where-warm.qtable"), 2, 0, None, report=None, robots=2)
+    parts = [
+        (engine, "run", "compiled steps (engine.run)"),
+        (engine.Engine, "begin", "episode start (Engine.begin)"),
+        (engine, "env_seed", "  env seed (SeedSequence)"),
+        (batch, "generator_state", "  2 generator states (SeedSequence, PCG64)"),
+        (KoolioEnv, "reset_key", "  env reset (KoolioEnv.reset_key)"),
+        (batch.EnvBatch, "load", "  load into the arrays (EnvBatch.load)"),
+        (engine.Engine, "result", "episode row (Engine.result)"),
+        (training.RunFiles, "finished", "log row and saves (RunFiles.finished)"),
+    ]
+    with CpuTimers(parts) as timers, Timer() as t:
+        res = train(
+            env(),
+            QTableStore(folder / "where.qtable"),
+            episodes,
+            0,
+            folder / "where.csv",
+            report=None,
+            robots=robots,
+        )
+    steps, n_ep = max(1, res.steps), max(1, res.episodes_run)
+    out: dict = {
+        "robots": robots,
+        "episodes": res.episodes_run,
+        "steps": res.steps,
+        "cpu_s": round(t.cpu, 3),
+        "us_per_step": round(1e6 * t.cpu / steps, 3),
+        "parts": {},
+    }
+    top = 0.0
+    for _, _, label in parts:
+        cpu = timers.cpu[label]
+        if not label.startswith(" "):
+            top += cpu
+        out["parts"][label] = {
+            "calls": timers.calls[label],
+            "us_per_step": round(1e6 * cpu / steps, 3),
+            "us_per_call": round(1e6 * cpu / max(1, timers.calls[label]), 2),
+        }
+    out["parts"]["the rest (train's loop, progress, Python around the calls)"] = {
+        "calls": 0,
+        "us_per_step": round(1e6 * (t.cpu - top) / steps, 3),
+        "us_per_call": 0.0,
+    }
+    kernel = timers.cpu["compiled steps (engine.run)"]
+    out["python_us_per_step"] = round(1e6 * (t.cpu - kernel) / steps, 3)
+    out["python_us_per_episode"] = round(1e6 * (t.cpu - kernel) / n_ep, 1)
+    return out
+
+
+def vector_rows(n: int, vec_steps: int, sync_steps: int) -> dict:
+    """``gymnasium.make_vec(ENV_ID, num_envs=n)`` (the compiled vector env) and its
+    ``vectorization_mode="sync"`` (Gymnasium's ``SyncVectorEnv`` of ``n`` ``KoolioEnv``)
+    stepped with seeded random actions: env-steps per second."""
+    import gymnasium as gym
+    import numpy as np
+
+    import koolio_pymunk  # noqa: F401 (registers the env)
+
+    out = {}
+    for key, mode, steps in (("compiled", None, vec_steps), ("sync", "sync", sync_steps)):
+        kw = {} if mode is None else {"vectorization_mode": mode}
+        envs = gym.make_vec(ENV_ID, num_envs=n, **kw)
+        actions = np.random.default_rng(0).integers(0, 5, (steps + 1, n))
+        envs.reset(seed=0)
+        envs.step(actions[0])  # compile / warm up
+        with Timer() as t:
+            for a in actions[1:]:
+                envs.step(a)
+        envs.close()
+        out[key] = rates(steps * n, t)
+        out[key].update(num_envs=n, class_name=type(envs).__name__)
+    out["ratio_cpu"] = ratio(out["compiled"], out["sync"], digits=1)
+    return out
+
+
+def evaluation_rows(folder: Path, episodes: int, python_episodes: int, robots: int) -> dict:
+    """``evaluate`` (greedy) of a table trained by default ``train`` for 300 episodes
+    (seed 0): on the engine with one robot, with ``robots``, and in the Python loop."""
+    from koolio_pymunk.learning.evaluation import evaluate
+    from koolio_pymunk.learning.qtable import QTableStore
+    from koolio_pymunk.learning.training import train
+    from koolio_pymunk.task.env import KoolioEnv
+
+    table = train(
+        KoolioEnv("hallway"), QTableStore(folder / "eval.qtable"), 300, 0, None, report=None
+    ).table
+    evaluate(KoolioEnv("hallway"), table, 2, 1, robots=2)  # compile / warm up
+    out = {}
+    rows = (
+        ("engine", {}, episodes),
+        (f"engine_{robots}", {"robots": robots}, episodes),
+        ("python", {"compiled": False}, python_episodes),
+    )
+    for key, kw, n in rows:
+        with Timer() as t:
+            ev = evaluate(KoolioEnv("hallway"), table, n, 1, **kw)
+        row = rates(round(ev.mean_steps * ev.episodes), t)
+        row.update(
+            episodes=n,
+            goal_rate=ev.goal_rate,
+            mean_steps=round(ev.mean_steps, 1),
+            episodes_per_cpu_s=round(n / max(1e-9, t.cpu), 1),
+            episodes_per_wall_s=round(n / max(1e-9, t.wall), 1),
+            **kw,
+        )
+        out[key] = row
+    out["ratio_engine_to_python_cpu"] = ratio(out["engine"], out["python"], digits=1)
+    return out
+
+
+def check_share(folder: Path, episodes: int, every: int) -> dict:
+    """``train --episodes E --eval-every N`` (one robot, default learner, seed 0): CPU
+    time in the checks (``PeriodicCheck.check``: the greedy evaluation of 100 episodes,
+    keeping the best table, the evaluations file's row) against the whole run."""
+    from koolio_pymunk.learning.evaluation import PeriodicCheck
+    from koolio_pymunk.learning.qtable import QTableStore
+    from koolio_pymunk.learning.training import train
+    from koolio_pymunk.task.env import KoolioEnv
+
+    label = "checks"
+    with CpuTimers([(PeriodicCheck, "check", label)]) as timers, Timer() as t:
+        res = train(
+            KoolioEnv("hallway"),
+            QTableStore(folder / "checks.qtable"),
+            episodes,
+            0,
+            folder / "checks.csv",
+            report=None,
+            eval_every=every,
+        )
+    check_cpu = timers.cpu[label]
+    out = rates(res.steps, t)
+    out.update(
+        episodes=episodes,
+        eval_every=every,
+        checks=len(res.checks),
+        check_cpu_s=round(check_cpu, 3),
+        training_cpu_s=round(t.cpu - check_cpu, 3),
+        check_share_cpu=round(check_cpu / max(1e-9, t.cpu), 3),
+        check_seconds_reported=round(sum(c.seconds for c in res.checks), 3),
+        train_seconds_reported=round(res.seconds, 3),
+        last_goal_rate=res.checks[-1].result.goal_rate if res.checks else None,
+    )
+    out["check_share_reported"] = round(
+        out["check_seconds_reported"] / max(1e-9, out["train_seconds_reported"]), 3
+    )
     return out
 
 
@@ -306,14 +545,21 @@ def motion(poses: int, repeats: int = 5) -> dict:
     return out_rows
 
 
-def step_costs(poses: int, step_us: float, repeats: int = 3, world: str | None = None) -> dict:
-    """Microseconds per robot-step of the compiled episode's parts, each in a compiled
+def step_costs(
+    poses: int,
+    step_us: float,
+    repeats: int = 3,
+    world: str | None = None,
+    config: str | None = "one-step-q",
+) -> dict:
+    """Microseconds per robot-step of the step engine's parts, each in a compiled
     loop (best of ``repeats``) replaying ``poses`` steps of a seeded learning run in the
     hallway (the poses before each step, in order, so the ray directions' cache works as
     in a run): the reading (rays, cameras, noise draws, encoding; in ``world``, e.g.
     ``koolio-real``, with its realism models), the move of each step's action (with the
-    world's motion errors), epsilon-greedy and the Table 11 update on the states read;
-    ``step_us`` is the whole step (the compiled loop's CPU time per step) and the rest is
+    world's motion errors), epsilon-greedy and the Table 11 update on the states read
+    (one-step Q: ``config`` is the learner's profile, ``one-step-q``); ``step_us`` is the
+    whole step (the engine's CPU time per step with the same learner) and the rest is
     judge, rescue check, the loop and Python between episodes."""
     import numba
     import numpy as np
@@ -342,10 +588,9 @@ def step_costs(poses: int, step_us: float, repeats: int = 3, world: str | None =
     def learning(keys, rewards, arng, index, table, journal):
         for i in range(keys.shape[0] - 1):
             a = choose(keys[i], 0.15, arng, 5, index, table[0])[0]
-            update(index, table, 0.2, 0.9, keys[i], a, rewards[i], keys[i + 1], False, 0,
-                   journal)  # fmt: skip
+            update(index, table, 0.2, 0.9, keys[i], a, rewards[i], keys[i + 1], False, 0, journal)
 
-    env = make_env("fast", world=world)
+    env = make_env("fast", world=world, config=config)
     table = QTable(env.layout, {}, env.config.learner.q_init)
     agent = make_learner(table, env.config.learner, None)
     run = Episodes(env, agent, 0)  # record a learning run's steps (the Python loop)
@@ -361,8 +606,11 @@ def step_costs(poses: int, step_us: float, repeats: int = 3, world: str | None =
     sense = reading_group(env.sensors)
     world = (wall_array(env.world), env.world.radius, float(env.move_distance), float(env.turn_arc))
     m = env.motion
-    motion = np.zeros(5) if m is None else np.array(
-        [1.0, m.drift, m.drift_sigma, m.slip_sigma, m.turn_sigma])  # fmt: skip
+    motion = (
+        np.zeros(5)
+        if m is None
+        else np.array([1.0, m.drift, m.drift_sigma, m.slip_sigma, m.turn_sigma])
+    )
     rng = np.random.default_rng(0)
     rewards = rng.uniform(-10.0, 0.0, poses)
     keys = np.empty(poses, np.int64)
@@ -399,15 +647,11 @@ def _near_wall(world, x: float, y: float) -> bool:
     return world.wall_clearance() < 12.0
 
 
-def profile(min_steps: int) -> list[dict]:
-    """Top 10 functions by own time in the fast single-robot loop."""
-    pr = cProfile.Profile()
-    pr.enable()
-    learning_loop("fast", min_steps, seed=1)
-    pr.disable()
+def profile_rows(pr: cProfile.Profile, top: int = 10) -> list[dict]:
+    """The ``top`` functions by own time in ``pr``'s profile."""
     st = pstats.Stats(pr)
     total = sum(v[2] for v in st.stats.values())
-    rows = sorted(st.stats.items(), key=lambda kv: kv[1][2], reverse=True)[:10]
+    rows = sorted(st.stats.items(), key=lambda kv: kv[1][2], reverse=True)[:top]
     out = []
     for (file, line, name), (_cc, nc, tt, ct, _callers) in rows:
         where = f"{Path(file).name}:{line}({name})" if line else name
@@ -438,73 +682,6 @@ def peak_rss_mib() -> float:
     return round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1)
 
 
-def competence(
-    seed: int, check_every: int, max_episodes: int, eval_episodes: int, folder: Path
-) -> dict:
-    """Default training until 90 % of greedy evaluation episodes reach the goal."""
-    from koolio_pymunk.learning.evaluation import evaluate
-    from koolio_pymunk.learning.qtable import QTableStore, human_bytes
-    from koolio_pymunk.learning.training import train
-    from koolio_pymunk.task.env import KoolioEnv
-
-    env = KoolioEnv("hallway")
-    store = QTableStore(folder / f"seed{seed}.qtable")
-    train_s = eval_s = 0.0
-    episodes, steps, rate, reached = 0, 0, 0.0, False
-    history = []
-    while episodes < max_episodes:
-        with Timer() as t:
-            res = train(env, store, check_every, seed, folder / f"seed{seed}.csv", report=None)
-        train_s += t.wall
-        episodes += check_every
-        steps += res.steps
-        with Timer() as t:
-            ev = evaluate(env, res.table, eval_episodes, seed)
-        eval_s += t.wall
-        rate = ev.goal_rate
-        history.append([episodes, round(train_s, 2), rate])
-        if rate >= 0.9:
-            reached = True
-            break
-    table = res.table
-    return {
-        "seed": seed,
-        "reached": reached,
-        "episodes": episodes,
-        "steps": steps,
-        "train_wall_s": round(train_s, 2),
-        "eval_wall_s": round(eval_s, 2),
-        "goal_rate": rate,
-        "history": history,
-        "peak_rss_mib": peak_rss_mib(),
-        "qtable_states": len(table),
-        "qtable_entries": table.entries,
-        "qtable_file_bytes": table.nbytes(),
-        "qtable_file": human_bytes(table.nbytes()),
-        "dense_entries": table.layout.n_entries,
-        "dense": human_bytes(table.layout.dense_bytes()),
-    }
-
-
-def competence_subprocess(seed: int, args: argparse.Namespace, folder: Path) -> dict:
-    cmd = [
-        sys.executable,
-        __file__,
-        "--competence-seed",
-        str(seed),
-        "--check-every",
-        str(args.check_every),
-        "--max-episodes",
-        str(args.max_episodes),
-        "--eval-episodes",
-        str(args.eval_episodes),
-        "--folder",
-        str(folder),
-    ]
-    done = subprocess.run(cmd, capture_output=True, text=True, check=True, cwd=ROOT)
-    return json.loads(done.stdout.strip().splitlines()[-1])
-
-
 def agreement_sample(poses: int) -> list[dict]:
     from sensing_agreement import compare_backends
 
@@ -526,8 +703,12 @@ def arena_check(points: int) -> dict:
             [r * math.cos(2 * math.pi * k / points), r * math.sin(2 * math.pi * k / points)]
             for k, r in enumerate(radii)
         ]
-        data = {"name": kind, "walls": walls, "goals": [{"name": "g", "at": [0, 100]}],
-                "start": {"at": [0, 0]}}  # fmt: skip
+        data = {
+            "name": kind,
+            "walls": walls,
+            "goals": [{"name": "g", "at": [0, 100]}],
+            "start": {"at": [0, 0]},
+        }
         with Timer() as t:
             parse_arena(data, kind)
         out[f"{kind}_s"] = round(t.wall, 3)
@@ -569,29 +750,552 @@ def realism_without(folder: Path) -> dict[str, Path]:
     return out
 
 
-def table_line(name: str, r: dict, extra: str = "") -> str:
-    return (
-        f"  {name:<34} {r['per_wall_s']:>10,} {r['per_cpu_s']:>10,}   "
-        f"{r['steps']:>8,} steps {r['wall_s']:>7.1f} s  {extra}"
+def competence(
+    seed: int,
+    check_every: int,
+    max_episodes: int,
+    eval_episodes: int,
+    folder: Path,
+    config: str | None = None,
+) -> dict:
+    """``train`` (``config``; None: the default learner) until 90 % of greedy evaluation
+    episodes reach the goal, a check every ``check_every`` episodes."""
+    from koolio_pymunk.learning.evaluation import evaluate
+    from koolio_pymunk.learning.qtable import QTableStore, human_bytes
+    from koolio_pymunk.learning.training import train
+
+    env = make_env("fast", config=config)
+    tag = f"{config or 'default'}-seed{seed}"
+    store = QTableStore(folder / f"{tag}.qtable")
+    train_s = train_reported = eval_s = 0.0
+    episodes, steps, rate, reached = 0, 0, 0.0, False
+    history = []
+    while episodes < max_episodes:
+        with Timer() as t:
+            res = train(env, store, check_every, seed, folder / f"{tag}.csv", report=None)
+        train_s += t.wall
+        train_reported += res.seconds
+        episodes += check_every
+        steps += res.steps
+        with Timer() as t:
+            ev = evaluate(env, res.table, eval_episodes, seed)
+        eval_s += t.wall
+        rate = ev.goal_rate
+        history.append([episodes, round(train_s, 2), rate])
+        if rate >= 0.9:
+            reached = True
+            break
+    table = res.table
+    return {
+        "seed": seed,
+        "config": config,
+        "reached": reached,
+        "episodes": episodes,
+        "steps": steps,
+        "train_wall_s": round(train_s, 2),
+        "train_reported_s": round(train_reported, 2),
+        "eval_wall_s": round(eval_s, 2),
+        "goal_rate": rate,
+        "history": history,
+        "peak_rss_mib": peak_rss_mib(),
+        "qtable_states": len(table),
+        "qtable_entries": table.entries,
+        "qtable_file_bytes": table.nbytes(),
+        "qtable_file": human_bytes(table.nbytes()),
+        "dense_entries": table.layout.n_entries,
+        "dense": human_bytes(table.layout.dense_bytes()),
+    }
+
+
+def competence_subprocess(
+    seed: int, args: argparse.Namespace, folder: Path, config: str | None
+) -> dict:
+    cmd = [
+        sys.executable,
+        __file__,
+        "--competence-seed",
+        str(seed),
+        "--check-every",
+        str(args.check_every),
+        "--max-episodes",
+        str(args.max_episodes),
+        "--eval-episodes",
+        str(args.eval_episodes),
+        "--folder",
+        str(folder),
+    ]
+    if config is not None:
+        cmd += ["--competence-config", config]
+    done = subprocess.run(cmd, capture_output=True, text=True, check=True, cwd=ROOT)
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def in_tree(tree: Path, call: str, folder: Path) -> dict:
+    """``call`` (an expression over ``bench``, ``Path`` and ``folder``) evaluated in a
+    new interpreter on ``tree``'s package and ``tree/tools/bench.py``: its JSON."""
+    code = (
+        "import json, sys; from pathlib import Path; "
+        f"sys.path.insert(0, {str(tree / 'tools')!r}); import bench; "
+        f"folder = Path({str(folder)!r}); print(json.dumps({call}))"
     )
+    env = dict(os.environ, PYTHONPATH=str(tree))
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=tree, env=env
+    )
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def baseline_rows(
+    base: Path, steps: int, robots: int, episodes: int, pairs: int, folder: Path
+) -> dict:
+    """This tree against ``base`` (module doc), ``pairs`` alternating pairs of runs."""
+    one_step = (
+        "'one-step-q'" if (base / "koolio_pymunk/profiles/one-step-q.yaml").exists() else None
+    )
+    rows = {
+        "default learner (--config qlambda-no-undo)": (
+            f"bench.learning_loop('fast', {steps}, config='qlambda-no-undo')",
+        )
+        * 2,
+        "one-step Q": (
+            f"bench.learning_loop('fast', {steps}, config={one_step})",
+            f"bench.learning_loop('fast', {steps}, config='one-step-q')",
+        ),
+        f"{robots} robots, one-step Q (robot-steps)": (
+            f"bench.many({robots}, {episodes}, folder"
+            + ("" if one_step is None else ", 'one-step-q'")
+            + ")",
+            f"bench.many({robots}, {episodes}, folder, 'one-step-q')",
+        ),
+    }
+    out: dict = {"base": str(base), "commit": _commit(base), "rows": {}}
+    for name, (old_call, new_call) in rows.items():
+        old, new = [], []
+        for k in range(pairs):
+            sub = folder / f"baseline-{len(out['rows'])}-{k}"
+            (sub / "old").mkdir(parents=True)
+            (sub / "new").mkdir()
+            old.append(in_tree(base, old_call, sub / "old")["per_cpu_s"])
+            new.append(in_tree(ROOT, new_call, sub / "new")["per_cpu_s"])
+        out["rows"][name] = {
+            "old_per_cpu_s": old,
+            "new_per_cpu_s": new,
+            "ratios": [round(n / max(1, o), 3) for o, n in zip(old, new)],
+        }
+    return out
+
+
+def _commit(tree: Path) -> str | None:
+    try:
+        done = subprocess.run(
+            ["git", "-C", str(tree), "rev-parse", "--short", "HEAD"],
+            capture_output=True,
+            text=True,
+            check=True,
+        )
+    except (OSError, subprocess.CalledProcessError):
+        return None
+    return done.stdout.strip()
+
+
+class Bench:
+    """One run of the benchmark: its arguments, its budgets, its rows so far."""
+
+    def __init__(self, args: argparse.Namespace, folder: Path) -> None:
+        self.args, self.folder, self.quick = args, folder, args.quick
+        self.report: dict = {
+            "machine": machine(),
+            "commit": _commit(ROOT),
+            "quick": args.quick,
+            "scale": args.scale,
+        }
+        self.loops: dict[str, dict] = {}
+
+    def n(self, full: int, quick: int) -> int:
+        """A budget: ``full``, or ``quick`` with ``--quick``, times ``--scale``."""
+        return max(1, round((quick if self.quick else full) * self.args.scale))
+
+    def loop(self, key: str, full: int, quick: int, **kw) -> dict:
+        """:func:`learning_loop`'s row ``key`` (measured once per run)."""
+        if key not in self.loops:
+            kw.setdefault("backend", "fast")
+            self.loops[key] = learning_loop(min_steps=self.n(full, quick), **kw)
+        return self.loops[key]
+
+    def engine(self) -> dict:
+        """The engine, one robot, the default learner (the rows' common reference)."""
+        return self.loop("engine", 300_000, 60_000)
+
+    def engine_q(self) -> dict:
+        """The engine, one robot, ``--config one-step-q``."""
+        return self.loop("engine_one_step_q", 300_000, 60_000, config="one-step-q")
+
+
+def section_one_robot(b: Bench) -> None:
+    ref = b.loop("reference", 15_000, 4_000, backend="pymunk")
+    print(table_line("reference loop (pymunk queries), default", ref))
+    eng, engq = b.engine(), b.engine_q()
+    py = b.loop("python", 150_000, 30_000, compiled=False)
+    pyq = b.loop("python_one_step_q", 150_000, 30_000, compiled=False, config="one-step-q")
+    eng["ratio_to_reference_cpu"] = ratio(eng, ref, digits=1)
+    eng["ratio_to_python_loop_cpu"] = ratio(eng, py)
+    engq["ratio_to_python_loop_cpu"] = ratio(engq, pyq)
+    engq["ratio_to_default_cpu"] = ratio(engq, eng)
+    print(
+        table_line(
+            "engine, 1 robot, default learner",
+            eng,
+            f"x{eng['ratio_to_reference_cpu']} reference, "
+            f"x{eng['ratio_to_python_loop_cpu']} Python loop",
+        )
+    )
+    print(table_line("Python loop, same backend, default learner", py))
+    print(
+        table_line(
+            "engine, 1 robot, --config one-step-q",
+            engq,
+            f"x{engq['ratio_to_python_loop_cpu']} Python loop, "
+            f"x{engq['ratio_to_default_cpu']} default",
+        )
+    )
+    print(table_line("Python loop, --config one-step-q", pyq))
+    b.report["one_robot"] = {
+        "reference": ref,
+        "engine": eng,
+        "python_loop": py,
+        "engine_one_step_q": engq,
+        "python_loop_one_step_q": pyq,
+    }
+
+
+def section_koolio_real(b: Bench) -> None:
+    eng = b.engine()
+    real = b.loop("koolio_real", 300_000, 60_000, world="koolio-real")
+    real["ratio_to_ideal_cpu"] = ratio(real, eng, digits=3)
+    real["ratio_to_ideal_wall"] = ratio(real, eng, "per_wall_s", digits=3)
+    print(
+        table_line(
+            "koolio-real world, default learner",
+            real,
+            f"{real['ratio_to_ideal_cpu']:.0%} of ideal (CPU)",
+        )
+    )
+    real["without"] = {}
+    for part, path in realism_without(b.folder).items():
+        r = learning_loop("fast", b.n(300_000, 60_000), world=str(path))
+        r["ratio_to_ideal_cpu"] = ratio(r, eng, digits=3)
+        real["without"][part] = r
+        print(
+            table_line(
+                f"  koolio-real, no {part}", r, f"{r['ratio_to_ideal_cpu']:.0%} of ideal (CPU)"
+            )
+        )
+    b.report["koolio_real"] = real
+
+
+def section_paper_memory(b: Bench) -> None:
+    engq = b.engine_q()
+    mem = b.loop("paper_memory", 150_000, 60_000, config="paper-memory")
+    mem_py = b.loop("paper_memory_python", 60_000, 30_000, compiled=False, config="paper-memory")
+    mem["ratio_to_python_loop_cpu"] = ratio(mem, mem_py)
+    mem["ratio_to_one_step_q_cpu"] = ratio(mem, engq, digits=3)
+    print(
+        table_line(
+            "paper-memory, engine",
+            mem,
+            f"x{mem['ratio_to_python_loop_cpu']} Python loop, "
+            f"{mem['ratio_to_one_step_q_cpu']:.0%} of one-step-q",
+        )
+    )
+    print(table_line("paper-memory, Python loop", mem_py))
+    b.report["paper_memory"] = {"engine": mem, "python_loop": mem_py}
+
+
+def section_train(b: Bench) -> None:
+    eng = b.engine()
+    end_to_end(2, b.folder)  # load the kernels' cache (no-op when a section ran before)
+    rows = {}
+    for key, label, kw, full, quick in (
+        ("fsync_second", "train end to end, --fsync second", {}, 600, 100),
+        ("fsync_episode", "train end to end, --fsync episode", {"fsync": "episode"}, 600, 100),
+        ("save_every_100", "train --save-every 100", {"save_every": 100}, 1_200, 200),
+        (
+            "fsync_episode_save_every_100",
+            "train --fsync episode --save-every 100",
+            {"fsync": "episode", "save_every": 100},
+            1_200,
+            200,
+        ),
+    ):
+        r = end_to_end(b.n(full, quick), b.folder, **kw)
+        r["ratio_to_engine_cpu"] = ratio(r, eng, digits=3)
+        rows[key] = r
+        print(table_line(label, r, f"{r['ratio_to_engine_cpu']:.0%} of the engine's loop"))
+    b.report["train"] = rows
+    irs = irsim_row(b.n(10_000, 2_000), rows["fsync_second"], b.folder)
+    if irs is not None:
+        b.report["irsim"] = irs
+        x = irs["ratio_train_to_irsim_cpu"]
+        print(table_line("IR-SIM, same hallway", irs, f"train end to end x{x}"))
+
+
+def section_eval(b: Bench) -> None:
+    ev = evaluation_rows(b.folder, b.n(3_000, 300), b.n(300, 50), b.args.robots)
+    b.report["eval"] = ev
+    for key in ("engine", f"engine_{b.args.robots}", "python"):
+        r = ev[key]
+        print(
+            table_line(
+                f"evaluate (greedy), {key}",
+                r,
+                f"{r['episodes_per_cpu_s']:,} episodes/CPU s, goal rate {r['goal_rate']:.0%}",
+            )
+        )
+    print(f"  evaluate: the engine x{ev['ratio_engine_to_python_cpu']} the Python loop (CPU)")
+
+
+def section_checks(b: Bench) -> None:
+    episodes = b.n(3_000, 300)
+    c = check_share(b.folder, episodes, max(1, min(100, episodes)))
+    b.report["checks"] = c
+    print(
+        table_line(
+            f"train --episodes {episodes} --eval-every {c['eval_every']}",
+            c,
+            f"checks {c['check_share_cpu']:.0%} of the CPU time ({c['checks']} "
+            f"checks, {c['check_cpu_s']:.2f} s; the evaluations file: "
+            f"{c['check_seconds_reported']:.2f} s of {c['train_seconds_reported']:.2f})",
+        )
+    )
+
+
+def section_robots(b: Bench) -> None:
+    n, episodes = b.args.robots, b.n(3_000, 300)
+    rows = {}
+    for key, config, world in (
+        ("one_step_q", "one-step-q", None),
+        ("default", None, None),
+        ("default_koolio_real", None, "koolio-real"),
+    ):
+        rows[key] = many(n, episodes, b.folder, config, world)
+        label = f"{n} robots, {config or 'default learner'}" + (f", {world}" if world else "")
+        print(table_line(label, rows[key], "robot-steps"))
+    where = many_where(n, episodes, b.folder)
+    rows["where"] = where
+    print(
+        f"  {n} robots, default learner, where a robot-step goes (CPU, µs per robot-step; "
+        f"{where['us_per_step']:.2f} in all; Python {where['python_us_per_episode']:.0f} µs "
+        "per finished episode):"
+    )
+    for label, part in where["parts"].items():
+        per_call = f"  {part['us_per_call']:8.1f} µs x {part['calls']:,}" if part["calls"] else ""
+        print(f"    {part['us_per_step']:6.3f}  {label}{per_call}")
+    pr = cProfile.Profile()
+    many(n, b.n(1_000, 100), b.folder, profiler=pr)
+    rows["profile"] = profile_rows(pr, top=12)
+    print(f"  cProfile of {n} robots (default learner), own time:")
+    for r in rows["profile"]:
+        print(f"    {r['share']:>6.1%} {r['calls']:>9,}  {r['function']}")
+    b.report["robots"] = rows
+
+
+def section_vector(b: Bench) -> None:
+    v = vector_rows(b.args.robots, b.n(2_000, 300), b.n(200, 30))
+    b.report["vector"] = v
+    n = b.args.robots
+    print(
+        table_line(
+            f"make_vec(num_envs={n}), {v['compiled']['class_name']}",
+            v["compiled"],
+            f"env-steps, x{v['ratio_cpu']} SyncVectorEnv",
+        )
+    )
+    print(table_line(f"SyncVectorEnv of {n} KoolioEnv", v["sync"], "env-steps"))
+
+
+def section_motion(b: Bench) -> None:
+    mo = b.report["motion"] = motion(b.n(2_000, 500))
+    print(
+        f"  one 12-inch move, us (all / near a wall, {mo['poses']} hallway poses): "
+        f"pymunk world {mo['pymunk_us_all']:.2f} / {mo['pymunk_us_near']:.2f}; compiled, "
+        f"from Python {mo['compiled_call_us_all']:.2f} / {mo['compiled_call_us_near']:.2f}, "
+        f"in a compiled loop {mo['compiled_loop_us_all']:.3f} / "
+        f"{mo['compiled_loop_us_near']:.3f}"
+    )
+
+
+def section_algorithms(b: Bench) -> None:
+    algos = b.report["algorithms"] = algorithms(b.n(150_000, 30_000))
+    print("  cost per step of each learner.algorithm (default configuration, same steps):")
+    for name, r in algos.items():
+        loop = "engine" if r["compiled"] else "Python loop"
+        print(
+            f"    {name:<15} x{r['ratio_to_q_cpu']:.2f} one-step Q  "
+            f"{r['us_per_step_cpu']:6.1f} us/step  {r['per_cpu_s']:>8,} steps/CPU s  "
+            f"({r['steps']:,} steps, {r['episodes']} episodes, {loop})"
+        )
+
+
+def section_step_costs(b: Bench) -> None:
+    real_q = b.loop(
+        "koolio_real_one_step_q", 300_000, 60_000, world="koolio-real", config="one-step-q"
+    )
+    for key, row, world in (
+        ("step_costs", b.engine_q(), None),
+        ("step_costs_koolio_real", real_q, "koolio-real"),
+    ):
+        step_us = 1e6 * row["cpu_s"] / max(1, row["steps"])
+        sc = b.report[key] = step_costs(b.n(20_000, 5_000), step_us, world=world)
+        print(
+            f"  one step of the engine (one-step Q){' in koolio-real' if world else ''}, us "
+            f"per robot-step (CPU): {sc['step_us']:.2f} = reading {sc['sense_us']:.2f} + move "
+            f"{sc['move_us']:.2f} + act and learn {sc['act_learn_us']:.2f} + judge, "
+            f"rescue, the loop and Python between episodes {sc['rest_us']:.2f}"
+        )
+
+
+def section_competence(b: Bench) -> None:
+    args = b.args
+    seeds = args.seeds if args.seeds is not None else ([0] if b.quick else [0, 1, 2])
+    out = {}
+    for config in (None, "one-step-q"):
+        comp = []
+        for s in seeds:
+            c = competence_subprocess(s, args, b.folder, config)
+            comp.append(c)
+            got = (
+                f"{c['episodes']} episodes, {c['train_wall_s']:.1f} s of training"
+                if c["reached"]
+                else f"not reached in {c['episodes']} episodes "
+                f"({c['train_wall_s']:.1f} s, last goal rate {c['goal_rate']:.0%})"
+            )
+            print(
+                f"  time to competence, {config or 'default learner'}, seed {s}: {got}; "
+                f"peak RSS {c['peak_rss_mib']} MiB; Q-table {c['qtable_entries']:,} entries, "
+                f"{c['qtable_file']} (dense: {c['dense_entries']:,} entries, {c['dense']})"
+            )
+        out[config or "default"] = comp
+    b.report["competence"] = out
+
+
+def section_profile(b: Bench) -> None:
+    pr = cProfile.Profile()
+    learning_loop("fast", b.n(60_000, 20_000), seed=1, profiler=pr)
+    prof = profile_rows(pr)
+    b.report["profile"] = prof
+    print("  where the time goes (one robot on the engine, default learner; cProfile own time):")
+    for r in prof:
+        print(f"    {r['share']:>6.1%} {r['calls']:>9,}  {r['function']}")
+
+
+def section_arena_check(b: Bench) -> None:
+    check = arena_check(5_000)
+    b.report["arena_check"] = check
+    print(
+        f"  check-arena, {check['points']:,}-point walls (validation only): ring "
+        f"{check['ring_s']:.2f} s, star {check['star_s']:.2f} s"
+    )
+
+
+def section_agreement(b: Bench) -> None:
+    agree = agreement_sample(b.n(2_000, 300))
+    b.report["agreement_sample"] = agree
+    print(
+        "  agreement sample (tools/agreement.py runs 100k per arena): "
+        + ", ".join(
+            f"{a['arena']} {a['poses']} poses: {a['distance_mismatches']} distance / "
+            f"{a['state_mismatches']} state mismatches"
+            for a in agree
+        )
+    )
+
+
+def section_baseline(b: Bench) -> None:
+    base = Path(b.args.baseline).resolve()
+    bl = baseline_rows(
+        base, b.n(300_000, 60_000), b.args.robots, b.n(3_000, 300), 2 if b.quick else 3, b.folder
+    )
+    b.report["baseline"] = bl
+    print(f"  against {bl['commit'] or base} (per CPU s, alternate runs, each in its process):")
+    for name, r in bl["rows"].items():
+        print(
+            f"    {name}: before {r['old_per_cpu_s']}, now {r['new_per_cpu_s']}, "
+            f"now/before {r['ratios']}"
+        )
+
+
+#: The sections in the order they run (``--only`` picks some; ``baseline`` runs only with
+#: ``--baseline``).
+SECTIONS: dict[str, Callable[[Bench], None]] = {
+    "one-robot": section_one_robot,
+    "koolio-real": section_koolio_real,
+    "paper-memory": section_paper_memory,
+    "train": section_train,
+    "eval": section_eval,
+    "checks": section_checks,
+    "robots": section_robots,
+    # Reserved: "8 robots in one shared arena" (robots that meet each other) gets its row
+    # here, beside the N-robot rows above, once the shared arena runs on the engine.
+    "vector": section_vector,
+    "motion": section_motion,
+    "algorithms": section_algorithms,
+    "step-costs": section_step_costs,
+    "competence": section_competence,
+    "profile": section_profile,
+    "arena-check": section_arena_check,
+    "agreement": section_agreement,
+    "baseline": section_baseline,
+}
+
+
+def _write(report: dict, out: str | None) -> int:
+    if out:
+        Path(out).write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
+        print(f"wrote {out}")
+    return 0
 
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--quick", action="store_true", help="short budgets (about a minute)")
+    p.add_argument("--quick", action="store_true", help="short budgets (about 3 minutes)")
+    p.add_argument(
+        "--scale",
+        type=float,
+        default=1.0,
+        help="multiply every budget by this (e.g. 0.02 for a smoke test)",
+    )
+    p.add_argument(
+        "--only",
+        nargs="+",
+        choices=list(SECTIONS),
+        default=None,
+        metavar="SECTION",
+        help=f"run these sections only: {', '.join(SECTIONS)}",
+    )
     p.add_argument("--out", default=None, help="write the figures as JSON here")
-    p.add_argument("--robots", type=int, default=64, help="robots for the N-robot row (64)")
+    p.add_argument(
+        "--robots",
+        type=int,
+        default=64,
+        help="robots of the N-robot rows and envs of the vector env (64)",
+    )
     p.add_argument("--seeds", type=int, nargs="*", default=None, help="competence seeds")
-    p.add_argument("--check-every", type=int, default=100)
+    p.add_argument(
+        "--check-every",
+        type=int,
+        default=25,
+        help="competence: episodes between greedy checks (25)",
+    )
     p.add_argument("--max-episodes", type=int, default=3000)
     p.add_argument("--eval-episodes", type=int, default=100)
     p.add_argument(
-        "--algorithms-only", action="store_true", help="only the cost per step of each algorithm"
-    )
-    p.add_argument(
-        "--robots-only", action="store_true", help="only the N-robot row (--robots robots)"
+        "--baseline",
+        default=None,
+        metavar="DIR",
+        help="a checkout of an earlier commit to compare with (section baseline)",
     )
     p.add_argument("--competence-seed", type=int, default=None, help=argparse.SUPPRESS)
+    p.add_argument("--competence-config", default=None, help=argparse.SUPPRESS)
     p.add_argument("--folder", default=None, help=argparse.SUPPRESS)
     args = p.parse_args(argv)
 
@@ -602,149 +1306,33 @@ def main(argv: list[str] | None = None) -> int:
             args.max_episodes,
             args.eval_episodes,
             Path(args.folder),
+            args.competence_config,
         )
         print(json.dumps(out))
         return 0
 
-    q = args.quick
-    seeds = args.seeds if args.seeds is not None else ([0] if q else [0, 1, 2])
-    report: dict = {"machine": machine(), "quick": q}
-    print(
-        f"koolio-pymunk bench ({'quick' if q else 'full'}), {report['machine']['cpus']} CPUs, "
-        f"load average {report['machine']['load_average']}"
-    )
-    if args.algorithms_only:
-        report["algorithms"] = algorithms_section(q)
-
-        return _write(report, args.out)
-    print(f"  {'':<34} {'per wall s':>10} {'per CPU s':>10}")
-    if args.robots_only:
-        with tempfile.TemporaryDirectory(dir=ROOT) as tmp:
-            report["many"] = many(args.robots, 300 if q else 3000, Path(tmp))
-        print(table_line(f"{args.robots} robots robot-steps/s", report["many"]))
-        return _write(report, args.out)
+    names = args.only or [s for s in SECTIONS if s != "baseline" or args.baseline]
+    if "baseline" in names and not args.baseline:
+        p.error("section baseline needs --baseline DIR")
     with tempfile.TemporaryDirectory(dir=ROOT) as tmp:
-        folder = Path(tmp)
-        ref = learning_loop("pymunk", 4_000 if q else 15_000)
-        print(table_line("reference (pymunk queries) steps/s", ref))
-        fast = learning_loop("fast", 60_000 if q else 300_000)
-        ratio = fast["per_cpu_s"] / max(1, ref["per_cpu_s"])
-        fast["ratio_to_reference_cpu"] = round(ratio, 1)
-        print(table_line("fast backend, compiled steps/s", fast, f"x{ratio:.1f} reference"))
-        python = learning_loop("fast", 30_000 if q else 150_000, compiled=False)
-        gain = fast["per_cpu_s"] / max(1, python["per_cpu_s"])
-        fast["ratio_to_python_loop_cpu"] = round(gain, 2)
-        print(table_line("fast backend, Python loop steps/s", python, f"compiled x{gain:.2f}"))
-        real = learning_loop("fast", 60_000 if q else 300_000, world="koolio-real")
-        real_ratio = real["per_cpu_s"] / max(1, fast["per_cpu_s"])
-        real["ratio_to_ideal_cpu"] = round(real_ratio, 3)
-        real["ratio_to_ideal_wall"] = round(real["per_wall_s"] / max(1, fast["per_wall_s"]), 3)
-        print(table_line("koolio-real world steps/s", real, f"{real_ratio:.0%} of ideal (CPU)"))
-        real["without"] = {}
-        for part, path in realism_without(folder).items():
-            r = learning_loop("fast", 60_000 if q else 300_000, world=str(path))
-            r["ratio_to_ideal_cpu"] = round(r["per_cpu_s"] / max(1, fast["per_cpu_s"]), 3)
-            real["without"][part] = r
-            share = f"{r['ratio_to_ideal_cpu']:.0%} of ideal (CPU)"
-            print(table_line(f"  koolio-real, no {part}", r, share))
-        mem = learning_loop("fast", 60_000 if q else 150_000, config="paper-memory")
-        mem_py = learning_loop(
-            "fast", 30_000 if q else 60_000, compiled=False, config="paper-memory"
-        )
-        mem_gain = mem["per_cpu_s"] / max(1, mem_py["per_cpu_s"])
-        mem["ratio_to_python_loop_cpu"] = round(mem_gain, 2)
-        mem["ratio_to_ideal_cpu"] = round(mem["per_cpu_s"] / max(1, fast["per_cpu_s"]), 3)
-        print(table_line("paper-memory, compiled steps/s", mem, f"x{mem_gain:.2f} Python loop"))
-        print(table_line("paper-memory, Python loop steps/s", mem_py))
-        e2e = end_to_end(100 if q else 600, folder)
-        print(table_line("train end to end (saves) steps/s", e2e))
-        e2e100 = end_to_end(200 if q else 1_200, folder, save_every=100)
-        print(table_line("train, --save-every 100 steps/s", e2e100))
-        irs = irsim_row(2_000 if q else 10_000, e2e, folder)
-        if irs is not None:
-            report["irsim"] = irs
-            ratio = irs["ratio_train_to_irsim_cpu"]
-            print(table_line("IR-SIM, same hallway steps/s", irs, f"train end to end x{ratio}"))
-        multi = many(args.robots, 300 if q else 3000, folder)
-        print(table_line(f"{args.robots} robots robot-steps/s", multi))
-        report.update(
-            reference=ref,
-            fast=fast,
-            python_loop=python,
-            koolio_real=real,
-            paper_memory=mem,
-            paper_memory_python_loop=mem_py,
-            end_to_end=e2e,
-            end_to_end_save_every_100=e2e100,
-            many=multi,
-        )
-
-        mo = report["motion"] = motion(500 if q else 2_000)
+        b = Bench(args, Path(tmp))
+        m = b.report["machine"]
         print(
-            f"  one 12-inch move, us (all / near a wall, {mo['poses']} hallway poses): "
-            f"pymunk world {mo['pymunk_us_all']:.2f} / {mo['pymunk_us_near']:.2f}; compiled, "
-            f"from Python {mo['compiled_call_us_all']:.2f} / {mo['compiled_call_us_near']:.2f}, "
-            f"in a compiled loop {mo['compiled_loop_us_all']:.3f} / "
-            f"{mo['compiled_loop_us_near']:.3f}"
+            f"koolio-pymunk bench ({'quick' if args.quick else 'full'}"
+            f"{f', scale {args.scale}' if args.scale != 1 else ''}) at {b.report['commit']}, "
+            f"{m['cpus']} CPUs, load average {m['load_average']}"
         )
-
-        report["algorithms"] = algorithms_section(q)
-
-        parts = (("step_costs", fast, None), ("step_costs_koolio_real", real, "koolio-real"))
-        for key, row, world in parts:
-            step_us = 1e6 * row["cpu_s"] / max(1, row["steps"])
-            sc = report[key] = step_costs(5_000 if q else 20_000, step_us, world=world)
-            print(
-                f"  one compiled step{' in koolio-real' if world else ''}, us per robot-step "
-                f"(CPU): {sc['step_us']:.2f} = reading {sc['sense_us']:.2f} + move "
-                f"{sc['move_us']:.2f} + act and learn {sc['act_learn_us']:.2f} + judge, "
-                f"rescue and the loop {sc['rest_us']:.2f}"
-            )
-
-        comp = []
-        for s in seeds:
-            c = competence_subprocess(s, args, folder)
-            comp.append(c)
-            got = (
-                f"{c['train_wall_s']:.1f} s of training, {c['episodes']} episodes"
-                if c["reached"]
-                else f"not reached in {c['episodes']} episodes "
-                f"({c['train_wall_s']:.1f} s, last goal rate {c['goal_rate']:.0%})"
-            )
-            print(
-                f"  time to competence, seed {s}: {got}; peak RSS {c['peak_rss_mib']} MiB; "
-                f"Q-table {c['qtable_entries']:,} entries, {c['qtable_file']} "
-                f"(dense: {c['dense_entries']:,} entries, {c['dense']})"
-            )
-        report["competence"] = comp
-
-        prof = profile(20_000 if q else 60_000)
-        report["profile"] = prof
-        print("  where the time goes (fast single-robot loop, compiled; cProfile own time):")
-        for r in prof:
-            print(f"    {r['share']:>6.1%} {r['calls']:>9,}  {r['function']}")
-
-        check = arena_check(5_000)
-        report["arena_check"] = check
-        print(
-            f"  check-arena, {check['points']:,}-point walls (validation only): ring "
-            f"{check['ring_s']:.2f} s, star {check['star_s']:.2f} s"
-        )
-
-        agree = agreement_sample(300 if q else 2_000)
-        report["agreement_sample"] = agree
-        print(
-            "  agreement sample (tools/agreement.py runs 100k per arena): "
-            + ", ".join(
-                f"{a['arena']} {a['poses']} poses: {a['distance_mismatches']} distance / "
-                f"{a['state_mismatches']} state mismatches"
-                for a in agree
-            )
-        )
-    report["peak_rss_bench_mib"] = round(
+        print(f"  {'':<44} {'per wall s':>10} {'per CPU s':>10}")
+        for name in names:
+            with Timer() as t:
+                SECTIONS[name](b)
+            b.report.setdefault("section_seconds", {})[name] = round(t.wall, 1)
+    b.report["load_average_end"] = [round(x, 2) for x in os.getloadavg()]
+    b.report["peak_rss_bench_mib"] = round(
         resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1
     )
-    return _write(report, args.out)
+    print(f"load average at the end {b.report['load_average_end']}")
+    return _write(b.report, args.out)
 
 
 if __name__ == "__main__":
