@@ -55,12 +55,14 @@ import numpy as np
 
 from ..store.kernel_cache import ensure_fresh
 from ..world.segment_query import (
+    CULL_MARGIN,
+    circle_shape_query,
     first_hit,
-    first_robot_hit,
     hypot,
     line_of_sight,
     line_of_sight_among,
     near_walls,
+    off_the_line,
     robots_near,
     walls_in_box,
 )
@@ -397,7 +399,6 @@ def _los_scene(x: float, y: float, tx: float, ty: float, scene: tuple) -> bool:
 
 
 _line_of_sight_among = inline_twin(line_of_sight_among)
-_first_robot_hit = inline_twin(first_robot_hit)
 #: :func:`camera_reading` in a shared world: the same code, compiled inline, its
 #: ``walls`` argument the scene of :func:`_los_scene` (walls and other robots), so that a
 #: robot blocks a sight line as a wall does.
@@ -446,12 +447,18 @@ def _sense_sub_arcs_among(
     then the robots' circles (a robot wins when strictly nearer: the reference asks the
     static walls first); the robot each ray hit, and the one the sonar's nearest ray (the
     first at the least distance) hit, -1 for a wall, nothing, or a reading out of range.
-    The incidence cosine on a robot is taken on its circle's normal."""
+    The incidence cosine on a robot is taken on its circle's normal. Robots are culled
+    per sonar to those whose circle reaches the fan of its rays (the sonar arc is below
+    180 degrees: a point no farther than ``R`` plus the cull margin from the fan), and per
+    ray by their distance from its line
+    (:func:`~koolio_pymunk.world.segment_query.off_the_line`), as
+    :func:`~koolio_pymunk.world.segment_query.first_robot_hit` asks them."""
     length, radius, far = params[0], params[1], params[2]
     incidence = params[6] == 1.0
     n_sonar, n_sub = ray_offsets.shape
     n_rays = n_sonar * n_sub
     active = np.empty(walls.shape[0], np.int64)
+    active_r = np.empty(n_r, np.int64)
     ends = np.empty((n_sub, 2))
     for s in range(n_sonar):
         x0 = x1 = x
@@ -466,13 +473,45 @@ def _sense_sub_arcs_among(
             y0 = min(y0, ey)
             y1 = max(y1, ey)
         n = walls_in_box(x0, y0, x1, y1, walls, near, n_near, active)
+        # the robots whose circle reaches the fan between the first and last rays (the
+        # half-planes of their lines and the one ahead, grown by R and the cull margin)
+        fx = trig[1 + s * n_sub]
+        fy = trig[1 + n_rays + s * n_sub]
+        lx = trig[n_sub + s * n_sub]
+        ly = trig[n_rays + n_sub + s * n_sub]
+        grow = radius + CULL_MARGIN
+        m = 0
+        for q in range(n_r):
+            jj = near_r[q]
+            vx = robots[jj, 0] - x
+            vy = robots[jj, 1] - y
+            if fx * vy - fy * vx < -grow or lx * vy - ly * vx > grow:
+                continue
+            if (fx + lx) * vx + (fy + ly) * vy < -2.0 * grow:
+                continue
+            active_r[m] = jj
+            m += 1
         nearest = np.inf
         who = -1
         for i in range(n_sub):
             ex = ends[i, 0]
             ey = ends[i, 1]
             alpha, k = first_hit(x, y, ex - x, ey - y, walls, active, n)
-            alpha, j, nx, ny = _first_robot_hit(x, y, ex, ey, radius, robots, near_r, n_r, alpha)
+            j = -1  # first_robot_hit written out: an array passed per ray costs its refcounts
+            nx = 0.0
+            ny = 0.0
+            for q in range(m):
+                jj = active_r[q]
+                cx = robots[jj, 0]
+                cy = robots[jj, 1]
+                if off_the_line(cx - x, cy - y, ex - x, ey - y, radius):
+                    continue
+                hit, a, cnx, cny = circle_shape_query(cx, cy, radius, x, y, ex, ey, 0.0)
+                if hit and a < alpha:
+                    alpha = a
+                    j = jj
+                    nx = cnx
+                    ny = cny
             d = alpha * length
             rays[s, i] = d
             ray_robot[s, i] = j

@@ -65,7 +65,7 @@ _SPLIT = 134217729.0
 
 
 #: Extra reach (inches) when culling walls by bounding box: far above any rounding.
-_CULL_MARGIN = 1.0
+CULL_MARGIN = _CULL_MARGIN = 1.0
 
 
 #: Chipmunk's ``CPFLOAT_MIN`` (``DBL_MIN``), added to a length before its reciprocal in
@@ -504,6 +504,16 @@ def robots_near(
     return n
 
 
+@numba.njit(cache=True, inline="always")
+def off_the_line(vx: float, vy: float, dx: float, dy: float, radius: float) -> bool:
+    """A circle of ``radius`` centred ``(vx, vy)`` from a segment's start, the segment
+    going ``(dx, dy)``: its centre lies farther than ``radius`` plus the cull margin from
+    the segment's line, or that far behind its start, so no query along the segment can
+    meet it (``|d|`` is bounded by ``|dx| + |dy|``, so no square root)."""
+    reach = (radius + _CULL_MARGIN) * (abs(dx) + abs(dy))
+    return abs(vx * dy - vy * dx) > reach or vx * dx + vy * dy < -reach
+
+
 @numba.njit(cache=True)
 def first_robot_hit(
     x: float, y: float, ex: float, ey: float, radius: float, robots: np.ndarray,
@@ -513,14 +523,20 @@ def first_robot_hit(
     ``near[:n]``, after the walls' hit fraction ``best``: ``(alpha, robot, nx, ny)`` of the
     first robot met strictly before ``best`` (``(best, -1, 0.0, 0.0)``: none). Chipmunk's
     radius-0 ``cpShapeSegmentQuery`` of each robot's circle, in index order, as
-    ``cpSpaceSegmentQueryFirst`` asks the robots' bodies after the static walls."""
+    ``cpSpaceSegmentQueryFirst`` asks the robots' bodies after the static walls; a robot
+    far off the ray's line (:func:`off_the_line`) is not asked."""
     who = -1
     bnx = 0.0
     bny = 0.0
+    dx = ex - x
+    dy = ey - y
     for q in range(n):
         j = near[q]
-        hit, alpha, nx, ny = circle_shape_query(robots[j, 0], robots[j, 1], radius, x, y, ex,
-                                                ey, 0.0)  # fmt: skip
+        cx = robots[j, 0]
+        cy = robots[j, 1]
+        if off_the_line(cx - x, cy - y, dx, dy, radius):
+            continue
+        hit, alpha, nx, ny = circle_shape_query(cx, cy, radius, x, y, ex, ey, 0.0)
         if hit and alpha < best:
             best = alpha
             who = j
@@ -568,7 +584,11 @@ def line_of_sight_among(
     for j in range(robots.shape[0]):
         if j == me or not present[j]:
             continue
-        hit, a, _, _ = circle_shape_query(robots[j, 0], robots[j, 1], radius, x, y, tx, ty, 0.0)
+        cx = robots[j, 0]
+        cy = robots[j, 1]
+        if off_the_line(cx - x, cy - y, tx - x, ty - y, radius):
+            continue
+        hit, a, _, _ = circle_shape_query(cx, cy, radius, x, y, tx, ty, 0.0)
         if hit and a < alpha:
             alpha = a
     return alpha >= 1.0 or alpha * dist >= dist - 1e-7

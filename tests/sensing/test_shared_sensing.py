@@ -197,6 +197,33 @@ def test_shared_readings_equal_the_reference(name: str, world: str | None) -> No
     assert r.bit_identical == r.poses and r.robot_readings > 0.7 * r.poses, r
 
 
+def test_the_engines_cast_and_sight_lines_equal_pymunks() -> None:
+    """``FastRays.cast`` and ``line_of_sight`` of a shared world (the viewer's rays:
+    ``segment_query.cast_among``, ``line_of_sight_among``) are ``PymunkRays``', bit for
+    bit, on 200 random poses of 8 robots in the obstacles arena."""
+    arena = load_arena("obstacles").to_world()
+    w = World(arena.segments(), R, 8, shared=True)
+    ref, fast = suite(w, "pymunk"), suite(w, "fast")
+    poses = free_poses("obstacles", R, 1800, 8)
+    blocked = hits = 0
+    for k in range(200):
+        x, y, h = poses[k]
+        w.place(0, (x, y), h)
+        for j in range(1, 8):
+            at = poses[200 + 7 * k + j - 1][:2]
+            w.park(j) if w.robot_clearance(j, at) <= 0.0 else w.place(j, at, 0.0)
+        dirs = ref.ray_dirs(h)
+        want = ref.engine.cast(x, y, dirs, ref.ray_length)
+        assert np.array_equal(fast.engine.cast(x, y, dirs, ref.ray_length), want)
+        hits += int((ref.engine.cast_hits(x, y, dirs, ref.ray_length)[2] >= 0).sum())
+        for j in range(1, 8):  # past each other robot, 30 in beyond its centre
+            tx, ty = w.xy[j] + 30.0 * (w.xy[j] - (x, y)) / max(1.0, math.dist(w.xy[j], (x, y)))
+            seen = ref.engine.line_of_sight(x, y, tx, ty)
+            assert fast.engine.line_of_sight(x, y, tx, ty) == seen
+            blocked += w.present[j] and not seen
+    assert hits > 1000 and blocked > 300, (hits, blocked)
+
+
 @pytest.mark.parametrize("name", SHIPPED)
 def test_the_cone_sees_a_robot_no_farther_than_the_sub_arcs(name: str) -> None:
     assert cone_disagreement(name, 150, seed=4, others=7).cone_not_nearer == 0
