@@ -19,6 +19,14 @@ whose end positions differ in any bit (exit 1 if any), the moves that met a wall
 started touching one, and the smallest clearance to a wall after a move. ``--poses 0``
 skips the sensors.
 
+``--shared K`` makes the pose and move checks in a shared arena with ``K`` other robots
+(``World(..., shared=True)``): the poses with ``K`` robots round the reader
+(:func:`sensing_agreement.compare_backends` with ``others``: the robot each
+ray and sonar met compared too, and the poses where a sonar read a robot counted), the
+moves of ``K + 1`` robots walking among each other
+(:func:`move_agreement.compare_shared_moves`: the moves a robot
+changed, the starts touching a robot, the smallest clearance between two robots).
+
 ``--episodes N`` also trains ``N`` seeded episodes of the hallway in each world
 (``--worlds``) with each learner (``--algorithms``: one-step Q and Q(lambda), those that
 run compiled) and each robot count (``--robots``: 1 and 8) twice, on the Python loop
@@ -30,6 +38,7 @@ robot's pose, state, memory, generators or learner, or the Q-table differ in any
     .venv/bin/python tools/agreement.py --poses 100000 --out agreement.json
     .venv/bin/python tools/agreement.py --poses 0 --moves 100000
     .venv/bin/python tools/agreement.py --poses 0 --episodes 3000
+    .venv/bin/python tools/agreement.py --poses 20000 --moves 100000 --shared 7
 
 About 1 ms per pose (the pymunk reference is most of it; 1 to 3 ms with koolio-real's
 models): 100k poses x 3 arenas take about 3 minutes per world on 2 cores. A move
@@ -51,32 +60,44 @@ ARENAS = ("hallway", "room", "obstacles")
 IDEAL = "ideal"
 
 
-def one(arena: str, poses: int, seed: int, noise: str, world: str) -> dict:
+def one(arena: str, poses: int, seed: int, noise: str, world: str, others: int = 0) -> dict:
     from sensing_agreement import compare_backends, cone_disagreement
 
     t = time.perf_counter()
     laid = None if world == IDEAL else world
-    out = compare_backends(arena, poses, seed=seed, noise=noise, world=laid).as_dict()
+    out = compare_backends(
+        arena, poses, seed=seed, noise=noise, world=laid, others=others
+    ).as_dict()
     out["world"] = world
+    out["others"] = others
     out["seconds"] = round(time.perf_counter() - t, 1)
     if world == IDEAL:
-        out["cone"] = cone_disagreement(arena, poses, seed=seed).as_dict()
+        out["cone"] = cone_disagreement(arena, poses, seed=seed, others=others).as_dict()
     return out
 
 
-def one_moves(arena: str | int, moves: int, seed: int, generated: int) -> dict:
-    """Move agreement in a shipped arena (a name) or generated arena number ``arena``."""
-    from move_agreement import compare_moves, generated_arenas
+def one_moves(arena: str | int, moves: int, seed: int, generated: int, others: int = 0) -> dict:
+    """Move agreement in a shipped arena (a name) or generated arena number ``arena``,
+    alone or among ``others`` robots."""
+    from move_agreement import (
+        compare_moves,
+        compare_shared_moves,
+        generated_arenas,
+    )
 
     laid = arena if isinstance(arena, str) else generated_arenas(generated, seed)[arena]
+    if others:
+        return compare_shared_moves(laid, moves, seed=seed, others=others).as_dict()
     return compare_moves(laid, moves, seed=seed).as_dict()
 
 
-def run_moves(moves: int, seed: int = 0, jobs: int = 2, generated: int = 4) -> list[dict]:
+def run_moves(
+    moves: int, seed: int = 0, jobs: int = 2, generated: int = 4, others: int = 0
+) -> list[dict]:
     """Move agreement figures per shipped and generated arena (a list of dicts)."""
     arenas: list[str | int] = [*ARENAS, *range(generated)]
     with ProcessPoolExecutor(max_workers=jobs) as pool:
-        futures = [pool.submit(one_moves, a, moves, seed, generated) for a in arenas]
+        futures = [pool.submit(one_moves, a, moves, seed, generated, others) for a in arenas]
         return [f.result() for f in futures]
 
 
@@ -218,15 +239,20 @@ def print_episodes(rows: list[dict]) -> None:
 
 
 def print_poses(rows: list[dict]) -> None:
+    shared = any(r.get("others") for r in rows)
+    if shared:
+        print(f"among {rows[0]['others']} other robots (a shared arena):")
+    extra = f" {'read a robot':>13}" if shared else ""
     print(
         f"{'arena':>10} {'world':>12} {'poses':>8} {'dist. mismatch':>15} "
-        f"{'state mismatch':>15} {'bit-identical':>14} {'max |diff| in':>14} {'s':>6}"
+        f"{'state mismatch':>15} {'bit-identical':>14} {'max |diff| in':>14}{extra} {'s':>6}"
     )
     for r in rows:
+        extra = f" {r['robot_readings']:>13}" if shared else ""
         print(
             f"{r['arena']:>10} {r['world']:>12} {r['poses']:>8} {r['distance_mismatches']:>15} "
             f"{r['state_mismatches']:>15} {r['bit_identical']:>14} "
-            f"{r['max_abs_diff']:>14.3g} {r['seconds']:>6}"
+            f"{r['max_abs_diff']:>14.3g}{extra} {r['seconds']:>6}"
         )
     cones = [r for r in rows if "cone" in r]
     if cones:
@@ -240,7 +266,27 @@ def print_poses(rows: list[dict]) -> None:
         )
 
 
+def print_shared_moves(rows: list[dict]) -> None:
+    print(
+        f"compiled swept move among {rows[0]['robots'] - 1} other robots vs the pymunk "
+        "world's (end positions, bit for bit):"
+    )
+    print(
+        f"{'arena':>12} {'moves':>8} {'mismatches':>11} {'met a robot':>12} "
+        f"{'touching one':>13} {'min clearance: wall':>20} {'robot':>10} {'s':>6}"
+    )
+    for r in rows:
+        print(
+            f"{r['arena']:>12} {r['moves']:>8} {r['mismatches']:>11} {r['robot_contacts']:>12} "
+            f"{r['touching_robot']:>13} {r['min_clearance']:>20.3g} "
+            f"{r['min_robot_clearance']:>10.3g} {r['seconds']:>6}"
+        )
+
+
 def print_moves(rows: list[dict]) -> None:
+    if rows and "robots" in rows[0]:
+        print_shared_moves(rows)
+        return
     print("compiled swept move vs the pymunk world's (end positions, bit for bit):")
     print(
         f"{'arena':>12} {'moves':>8} {'mismatches':>11} {'met a wall':>11} "
@@ -259,10 +305,14 @@ def run(
     jobs: int = 2,
     noise: str = "none",
     worlds: tuple[str, ...] = (IDEAL, "koolio-real"),
+    others: int = 0,
 ) -> list[dict]:
-    """Agreement figures per shipped arena and world (a list of dicts)."""
+    """Agreement figures per shipped arena and world (a list of dicts), alone or among
+    ``others`` robots."""
     with ProcessPoolExecutor(max_workers=jobs) as pool:
-        futures = [pool.submit(one, a, poses, seed, noise, w) for w in worlds for a in ARENAS]
+        futures = [
+            pool.submit(one, a, poses, seed, noise, w, others) for w in worlds for a in ARENAS
+        ]
         return [f.result() for f in futures]
 
 
@@ -280,6 +330,13 @@ def main(argv: list[str] | None = None) -> int:
     )
     p.add_argument("--moves", type=int, default=0, help="moves per arena, the motion (0)")
     p.add_argument("--generated", type=int, default=4, help="generated arenas for --moves (4)")
+    p.add_argument(
+        "--shared",
+        type=int,
+        default=0,
+        metavar="K",
+        help="--poses and --moves in a shared arena with K other robots (0: alone)",
+    )
     p.add_argument(
         "--episodes", type=int, default=0, help="training episodes per world, the episode (0)"
     )
@@ -300,10 +357,10 @@ def main(argv: list[str] | None = None) -> int:
     args = p.parse_args(argv)
     rows, moves, episodes = [], [], []
     if args.poses:
-        rows = run(args.poses, args.seed, args.jobs, args.noise, tuple(args.worlds))
+        rows = run(args.poses, args.seed, args.jobs, args.noise, tuple(args.worlds), args.shared)
         print_poses(rows)
     if args.moves:
-        moves = run_moves(args.moves, args.seed, args.jobs, args.generated)
+        moves = run_moves(args.moves, args.seed, args.jobs, args.generated, args.shared)
         print_moves(moves)
     if args.episodes:
         episodes = run_episodes(

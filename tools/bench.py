@@ -47,6 +47,13 @@ prints its rows; all go to ``--out`` as JSON; ``--only NAME ...`` runs some of t
   (one-step Q and Q(lambda) on the engine and in the Python loop, Dyna-Q with its default
   ``planning_steps``, which runs the Python loop), the same number of steps from an empty
   table in this one run: the cost per step and its ratio to the engine's one-step Q;
+* ``shared-arena``: the cost of one 12-inch move and of one reading of a robot among 7
+  others in one hallway (``World(..., shared=True)``: :func:`shared_costs`), next to the
+  same robot alone, each in a compiled loop over the same poses: the compiled move
+  (``swept_move.move_among`` against ``move``) and the whole reading with its draws
+  (``reading_kernel.sense_reading_among`` against ``sense_reading``), in the ideal world
+  and in ``koolio-real`` (the shared arena's world and sensing; its episodes do not run
+  on the engine yet);
 * ``step-costs``: one step of the engine taken apart, each part timed in a compiled loop
   over the same recorded poses (:func:`step_costs`, one-step Q), in the ideal world and
   in ``koolio-real``;
@@ -543,6 +550,124 @@ def motion(poses: int, repeats: int = 5) -> dict:
         out_rows[f"compiled_call_us_{label}"] = best(compiled_calls, sel)
         out_rows[f"compiled_loop_us_{label}"] = best(compiled_loop, sel)
     return out_rows
+
+
+def shared_costs(poses: int, robots: int = 8, repeats: int = 5) -> dict:
+    """Microseconds (CPU, best of ``repeats``) per 12-inch move and per reading of a robot
+    among ``robots - 1`` others in the first 400 in of the hallway (poses and robots there,
+    overlapping nobody: they meet often), against the same robot alone: the compiled move
+    and the whole compiled reading (draws, rays, cameras, read-out), in the ideal world and
+    in ``koolio-real``; each in one compiled loop."""
+    import math
+
+    import numba
+    import numpy as np
+    from move_agreement import free_points
+
+    from koolio_pymunk.sensing.reading_kernel import (
+        ReadingArrays,
+        reading_group,
+        robot_group,
+        robot_others,
+        sense_reading,
+        sense_reading_among,
+    )
+    from koolio_pymunk.sensing.suite import SensorSuite
+    from koolio_pymunk.store.config import Config, apply_world
+    from koolio_pymunk.world.arena import load_arena
+    from koolio_pymunk.world.physics import World
+    from koolio_pymunk.world.segment_query import wall_array
+    from koolio_pymunk.world.swept_move import move, move_among
+
+    @numba.njit
+    def moves_alone(walls, pts, hs, out):
+        for i in range(pts.shape[0]):
+            out[i, 0], out[i, 1] = move(walls, pts[i, 0], pts[i, 1], hs[i], 12.0, 10.0)
+
+    @numba.njit
+    def moves_among(walls, robots, present, pts, hs, out):
+        for i in range(pts.shape[0]):
+            robots[0, 0], robots[0, 1] = pts[i, 0], pts[i, 1]
+            out[i, 0], out[i, 1] = move_among(walls, robots, present, 0, pts[i, 0], pts[i, 1],
+                                              hs[i], 12.0, 10.0)  # fmt: skip
+
+    @numba.njit
+    def reads_alone(pts, hs, rng, sense, keys):
+        for i in range(pts.shape[0]):
+            keys[i] = sense_reading(pts[i, 0], pts[i, 1], hs[i], rng, sense)[0]
+
+    @numba.njit
+    def reads_among(pts, hs, rng, shared, rows, robots, present, robot_rows, keys):
+        sense = robot_group(0, shared, rows)
+        others = robot_others(0, robots, present, robot_rows)
+        for i in range(pts.shape[0]):
+            robots[0, 0], robots[0, 1] = pts[i, 0], pts[i, 1]
+            keys[i] = sense_reading_among(pts[i, 0], pts[i, 1], hs[i], rng, sense, others)[0]
+
+    def best(fn) -> float:
+        times = []
+        for _ in range(repeats):
+            t0 = time.process_time()
+            fn()
+            times.append(time.process_time() - t0)
+        return round(1e6 * min(times) / poses, 3)
+
+    arena = load_arena("hallway")
+    laid = arena.to_world()
+    rng = np.random.default_rng(0)
+    spots = [p for p in free_points(arena, 10.0, 4000, rng) if p[0] < 400.0]
+    alone = World(laid.segments(), 10.0)
+    crowd = World(laid.segments(), 10.0, robots, shared=True)
+    k = 1
+    for p in spots:
+        if k < robots and crowd.robot_clearance(k, p) > 0.0:
+            crowd.place(k, p, 0.0)
+            k += 1
+    crowd.place(0, spots[0], 0.0)
+    pts = np.array([p for p in spots if crowd.robot_clearance(0, p) > 0.0][:poses])
+    pts = np.resize(pts, (poses, 2))
+    hs = rng.uniform(0.0, 2.0 * math.pi, poses)
+    walls = wall_array(alone)
+    out = np.empty_like(pts)
+    keys = np.empty(poses, np.int64)
+    xy, present = crowd.xy, crowd.present
+    row = {"poses": poses, "robots": robots}
+    moves_alone(walls, pts[:1], hs[:1], out[:1])  # compile
+    moves_among(walls, xy, present, pts[:1], hs[:1], out[:1])
+    row["move_us_alone"] = best(lambda: moves_alone(walls, pts, hs, out))
+    row["move_us_among"] = best(lambda: moves_among(walls, xy, present, pts, hs, out))
+    met = np.empty_like(pts)
+    moves_alone(walls, pts, hs, met)
+    moves_among(walls, xy, present, pts, hs, out)
+    row["moves_met_a_robot"] = int((met != out).any(axis=1).sum())
+    for world in (None, "koolio-real"):
+        cfg = Config() if world is None else apply_world(Config(), world)
+        tag = "ideal" if world is None else world
+        kw = dict(goal=laid.goal().at, markers=[m.at for m in laid.end_of_world],
+                  realism=cfg.realism)  # fmt: skip
+        mine = SensorSuite(cfg.sensors, crowd, robot=0, **kw)
+        them = ReadingArrays([mine])
+        them.load(0, mine)
+        sense = reading_group(SensorSuite(cfg.sensors, alone, **kw))
+        args = (them.shared, them.rows, xy, present, them.robot_rows)
+        reads_alone(pts[:1], hs[:1], rng, sense, keys[:1])
+        reads_among(pts[:1], hs[:1], rng, *args, keys[:1])
+        row[f"read_us_alone_{tag}"] = best(
+            lambda sense=sense: reads_alone(pts, hs, rng, sense, keys)
+        )
+        row[f"read_us_among_{tag}"] = best(lambda args=args: reads_among(pts, hs, rng, *args, keys))
+    crowd.place(0, spots[0], 0.0)
+    return row
+
+
+def print_shared(sc: dict) -> None:
+    print(
+        f"  shared hallway, {sc['robots']} robots, us per robot (CPU, {sc['poses']} poses; "
+        f"alone / among {sc['robots'] - 1} others): 12-inch move {sc['move_us_alone']:.3f} / "
+        f"{sc['move_us_among']:.3f} ({sc['moves_met_a_robot']} moves met a robot); reading "
+        f"{sc['read_us_alone_ideal']:.2f} / {sc['read_us_among_ideal']:.2f}, in koolio-real "
+        f"{sc['read_us_alone_koolio-real']:.2f} / {sc['read_us_among_koolio-real']:.2f}"
+    )
 
 
 def step_costs(
@@ -1154,6 +1279,11 @@ def section_step_costs(b: Bench) -> None:
         )
 
 
+def section_shared_arena(b: Bench) -> None:
+    b.report["shared_arena"] = shared_costs(b.n(10_000, 2_000))
+    print_shared(b.report["shared_arena"])
+
+
 def section_competence(b: Bench) -> None:
     args = b.args
     seeds = args.seeds if args.seeds is not None else ([0] if b.quick else [0, 1, 2])
@@ -1234,8 +1364,7 @@ SECTIONS: dict[str, Callable[[Bench], None]] = {
     "eval": section_eval,
     "checks": section_checks,
     "robots": section_robots,
-    # Reserved: "8 robots in one shared arena" (robots that meet each other) gets its row
-    # here, beside the N-robot rows above, once the shared arena runs on the engine.
+    "shared-arena": section_shared_arena,
     "vector": section_vector,
     "motion": section_motion,
     "algorithms": section_algorithms,

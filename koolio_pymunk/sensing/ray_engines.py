@@ -14,6 +14,19 @@ compiled twin of the same Chipmunk query. ``sensors.backend`` picks one
 (:func:`make_engine`).
 
 The rays' directions come from the sensor suite (:func:`~.suite.turned`).
+
+**A shared world** (:class:`~koolio_pymunk.world.physics.World` with ``shared=True``):
+an engine made for robot ``robot`` sees the walls and every *other* robot in the arena
+(their circles: :meth:`World.sensor_filter
+<koolio_pymunk.world.physics.World.sensor_filter>`), never its own body nor a parked
+robot. A ray ends on the nearest surface, wall or robot; a robot blocks a sight line as a
+wall does. :meth:`PymunkRays.cast_hits` also says which robot each ray hit (-1: a wall or
+nothing) and the incidence on it (the circle's normal at the hit point, as pymunk reports
+it). :class:`FastRays` answers with the compiled twins
+(:func:`~koolio_pymunk.world.segment_query.cast_among`,
+:func:`~koolio_pymunk.world.segment_query.line_of_sight_among`) over the world's
+:attr:`~koolio_pymunk.world.physics.World.xy` and
+:attr:`~koolio_pymunk.world.physics.World.present` as they stand at each call.
 """
 
 from __future__ import annotations
@@ -22,17 +35,22 @@ import math
 
 import numpy as np
 
-from ..world.physics import WALL_ONLY, World
-from ..world.segment_query import cast, line_of_sight, wall_array
+from ..world.physics import World
+from ..world.segment_query import cast, cast_among, line_of_sight, line_of_sight_among, wall_array
 
 
 class PymunkRays:
-    """The reference engine: one ``space.segment_query_first`` per ray (walls only)."""
+    """The reference engine: one ``space.segment_query_first`` per ray (the walls; in a
+    shared world also the other robots in the arena) for robot ``robot``."""
 
     name = "pymunk"
 
-    def __init__(self, world: World) -> None:
+    def __init__(self, world: World, robot: int = 0) -> None:
         self.world = world
+        self.robot = robot
+        self.filter = world.sensor_filter(robot)
+        """What the rays see (:meth:`World.sensor_filter
+        <koolio_pymunk.world.physics.World.sensor_filter>`)."""
 
     def cast(self, x: float, y: float, dirs: np.ndarray, length: float) -> np.ndarray:
         ends_x = x + length * dirs[0]
@@ -41,7 +59,7 @@ class PymunkRays:
         out = np.full(ends_x.shape, length)
         start = (x, y)
         for idx in np.ndindex(ends_x.shape):
-            hit = query(start, (float(ends_x[idx]), float(ends_y[idx])), 0.0, WALL_ONLY)
+            hit = query(start, (float(ends_x[idx]), float(ends_y[idx])), 0.0, self.filter)
             if hit is not None:
                 out[idx] = hit.alpha * length
         return out
@@ -58,39 +76,71 @@ class PymunkRays:
         out = np.full(ends_x.shape, length)
         inc = np.zeros(ends_x.shape)
         for idx in np.ndindex(ends_x.shape):
-            hit = query((x, y), (float(ends_x[idx]), float(ends_y[idx])), 0.0, WALL_ONLY)
+            hit = query((x, y), (float(ends_x[idx]), float(ends_y[idx])), 0.0, self.filter)
             if hit is not None:
                 out[idx] = hit.alpha * length
                 inc[idx] = abs(cos_a[idx] * hit.normal.x + sin_a[idx] * hit.normal.y)
         return out, inc
 
+    def cast_hits(
+        self, x: float, y: float, dirs: np.ndarray, length: float
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`cast_incidence` and, per ray, the robot it hit (:meth:`World.robot_of
+        <koolio_pymunk.world.physics.World.robot_of>`; -1: a wall, or nothing hit)."""
+        cos_a, sin_a = dirs[0], dirs[1]
+        ends_x = x + length * cos_a
+        ends_y = y + length * sin_a
+        query = self.world.space.segment_query_first
+        out = np.full(ends_x.shape, length)
+        inc = np.zeros(ends_x.shape)
+        robot = np.full(ends_x.shape, -1, np.int64)
+        for idx in np.ndindex(ends_x.shape):
+            hit = query((x, y), (float(ends_x[idx]), float(ends_y[idx])), 0.0, self.filter)
+            if hit is not None:
+                out[idx] = hit.alpha * length
+                inc[idx] = abs(cos_a[idx] * hit.normal.x + sin_a[idx] * hit.normal.y)
+                robot[idx] = self.world.robot_of(hit.shape)
+        return out, inc, robot
+
     def line_of_sight(self, x: float, y: float, tx: float, ty: float) -> bool:
         dist = math.hypot(tx - x, ty - y)
         if dist < 1e-9:
             return True
-        hit = self.world.space.segment_query_first((x, y), (tx, ty), 0.0, WALL_ONLY)
+        hit = self.world.space.segment_query_first((x, y), (tx, ty), 0.0, self.filter)
         return hit is None or hit.alpha * dist >= dist - 1e-7
 
 
 class FastRays:
-    """The compiled engine over the world's walls (taken once: walls never move)."""
+    """The compiled engine over the world's walls (taken once: walls never move) and, in a
+    shared world, the other robots where they are at each call."""
 
     name = "fast"
 
-    def __init__(self, world: World) -> None:
+    def __init__(self, world: World, robot: int = 0) -> None:
         self.world = world
+        self.robot = robot
         self.walls = wall_array(world)
 
     def cast(self, x: float, y: float, dirs: np.ndarray, length: float) -> np.ndarray:
-        return cast(float(x), float(y), np.ascontiguousarray(dirs, float), length, self.walls)
+        dirs = np.ascontiguousarray(dirs, float)
+        w = self.world
+        if w.shared:
+            return cast_among(float(x), float(y), dirs, length, self.walls, w.xy, w.present,
+                              self.robot, w.radius)  # fmt: skip
+        return cast(float(x), float(y), dirs, length, self.walls)
 
     def line_of_sight(self, x: float, y: float, tx: float, ty: float) -> bool:
+        w = self.world
+        if w.shared:
+            return bool(line_of_sight_among(float(x), float(y), float(tx), float(ty), self.walls,
+                                            w.xy, w.present, self.robot, w.radius))  # fmt: skip
         return bool(line_of_sight(float(x), float(y), float(tx), float(ty), self.walls))
 
 
 ENGINES = {"pymunk": PymunkRays, "fast": FastRays, "cone": FastRays}
 
 
-def make_engine(name: str, world: World) -> PymunkRays | FastRays:
-    """The ray engine called ``name`` (``sensors.backend``) for ``world``."""
-    return ENGINES[name](world)
+def make_engine(name: str, world: World, robot: int = 0) -> PymunkRays | FastRays:
+    """The ray engine called ``name`` (``sensors.backend``) for robot ``robot`` of
+    ``world``."""
+    return ENGINES[name](world, robot)

@@ -11,6 +11,34 @@ the reference turns it (:func:`~koolio_pymunk.sensing.suite.turned`), and walls
 are culled by bounding box, first those beyond the sonar range, then, per sonar, those
 outside the box of its rays (grown by 1 in); a culled wall cannot be hit.
 
+**A shared world** (robots that are bodies to each other: :mod:`koolio_pymunk.world.physics`):
+:func:`sense_among` is :func:`sense_one` with the other robots in the arena as surfaces,
+given as the group ``others`` = ``(robots, present, me, ray_robot, sonar_robot)``
+(:data:`~koolio_pymunk.sensing.sensor_arrays.OTHERS`): every robot's centre ``(N, 2)``,
+whether it is in the arena, the reading robot's index (its own body is not seen), and
+two buffers it writes, per ray the robot it hit and per sonar the robot whose surface it
+read (-1: a wall, or nothing). What a robot sees of another:
+
+* a sonar ray ends on the nearest surface, a wall or another robot's circle (radius
+  ``R``): Chipmunk's radius-0 ``cpShapeSegmentQuery`` of the circle
+  (:func:`~koolio_pymunk.world.segment_query.first_robot_hit`), asked after the walls
+  and winning only when strictly nearer; its incidence cosine (the realism incidence
+  model) is taken on the circle's normal at the hit point;
+* with the cone model, the nearest point of each robot's circle inside the cone
+  (:func:`cone_circle`) next to the walls' (:func:`cone_nearest`);
+* a sonar's reading comes from a robot when its nearest ray (the first of its rays at
+  the least distance; with the cone model, a robot strictly nearer than every wall) hit
+  one within range: that robot's index goes to ``sonar_robot`` (the task floor's
+  ``robot_bump``);
+* another robot blocks a camera's sight line to the goal plate, a marker or another
+  plate as a wall does (a radius-0 segment against its circle:
+  :func:`~koolio_pymunk.world.segment_query.line_of_sight_among`).
+
+The pymunk reference of all this is :class:`~koolio_pymunk.sensing.ray_engines.PymunkRays`
+over a shared world's space; ``tests/sensing/test_shared_sensing.py`` holds the two to the
+same readings bit for bit. An isolated world's readings never pass here
+(:func:`sense_one` is unchanged).
+
 **How it was checked.** ``tests/sensing/test_ray_kernel.py`` compares the fused kernel
 with the pymunk path on random poses in every shipped arena (identical encoded states,
 distances within 1e-6 in); ``tools/agreement.py`` does it on 100k poses per arena and
@@ -26,7 +54,18 @@ import numba
 import numpy as np
 
 from ..store.kernel_cache import ensure_fresh
-from ..world.segment_query import first_hit, hypot, line_of_sight, near_walls, walls_in_box
+from ..world.segment_query import (
+    CULL_MARGIN,
+    circle_shape_query,
+    first_hit,
+    hypot,
+    line_of_sight,
+    line_of_sight_among,
+    near_walls,
+    off_the_line,
+    robots_near,
+    walls_in_box,
+)
 from .inline_twins import inline_twin
 
 ensure_fresh()  # numba's cache, in step with every kernel's source (see there)
@@ -305,4 +344,235 @@ def sense_batch(
         sense_one_inline(xs[r], ys[r], hs[r], geometry, goals[r], no_plates, buffers)
 
 
-# -- engines -------------------------------------------------------------------------------
+# -- a shared world: the other robots as surfaces --------------------------------------------
+
+
+@numba.njit(cache=True)
+def cone_circle(
+    x: float, y: float, theta: float, half: float, cx: float, cy: float, r: float
+) -> float:
+    """Distance from ``(x, y)`` to the nearest point of the circle of radius ``r`` at
+    ``(cx, cy)`` (another robot) inside the cone ``theta +- half`` (``half`` < 90
+    degrees): :func:`cone_nearest` for a circle. Infinity when the circle does not enter
+    the cone, 0 when ``(x, y)`` is inside it.
+
+    The circle's nearest point overall lies towards its centre: when the centre's
+    direction is in the cone, ``|c - p| - r``. Else the distance grows away from that
+    point along the circle, so the nearest point in the cone is where the circle first
+    crosses an edge of the cone: ``p - sqrt(r^2 - q^2)`` along an edge ray of unit ``u``
+    (``p``, ``q``: the centre's offset along and across ``u``), the smaller over the two.
+
+    >>> cone_circle(0.0, 0.0, 0.0, 0.5, 30.0, 0.0, 10.0)                # straight ahead
+    20.0
+    >>> round(cone_circle(0.0, 0.0, 0.0, math.pi / 4, 30.0, 30.0, 10.0), 9)  # on an edge
+    32.426406871
+    >>> cone_circle(0.0, 0.0, 0.0, 0.1, 0.0, 30.0, 10.0)                # beside the cone
+    inf
+    """
+    vx = cx - x
+    vy = cy - y
+    d = math.sqrt(vx * vx + vy * vy)
+    if d <= r:
+        return 0.0
+    lx, ly = math.cos(theta + half), math.sin(theta + half)
+    rx, ry = math.cos(theta - half), math.sin(theta - half)
+    if lx * vy - ly * vx <= 0.0 and rx * vy - ry * vx >= 0.0:  # cone_nearest's inside
+        return d - r
+    best = np.inf
+    for e in range(2):
+        ux = lx if e == 0 else rx
+        uy = ly if e == 0 else ry
+        along = ux * vx + uy * vy
+        across = ux * vy - uy * vx
+        if along > 0.0 and across * across <= r * r:
+            best = min(best, along - math.sqrt(r * r - across * across))
+    return best
+
+
+@numba.njit(cache=True, inline="always")
+def _los_scene(x: float, y: float, tx: float, ty: float, scene: tuple) -> bool:
+    """:func:`~koolio_pymunk.world.segment_query.line_of_sight_among` with its walls and
+    robots as one ``scene`` = ``(walls, robots, present, me, radius)``: what
+    :func:`camera_reading_among` passes where :func:`camera_reading` passes the walls."""
+    walls, robots, present, me, radius = scene
+    return _line_of_sight_among(x, y, tx, ty, walls, robots, present, me, radius)
+
+
+_line_of_sight_among = inline_twin(line_of_sight_among)
+#: :func:`camera_reading` in a shared world: the same code, compiled inline, its
+#: ``walls`` argument the scene of :func:`_los_scene` (walls and other robots), so that a
+#: robot blocks a sight line as a wall does.
+camera_reading_among = inline_twin(camera_reading, line_of_sight=_los_scene)
+
+
+@numba.njit(cache=True, inline="always")
+def _sense_cones_among(
+    x: float, y: float, h: float, ray_offsets: np.ndarray, params: np.ndarray,
+    walls: np.ndarray, near: np.ndarray, n_near: int, raw: np.ndarray, rays: np.ndarray,
+    robots: np.ndarray, near_r: np.ndarray, n_r: int, ray_robot: np.ndarray,
+    sonar_robot: np.ndarray,
+) -> None:  # fmt: skip
+    """:func:`_sense_cones` with the robots ``near_r[:n_r]``: a sonar reads the nearest
+    of the walls' and the robots' cone distances; a robot strictly nearer than every
+    wall, within range, is the reading's source."""
+    length, radius, far, half = params[0], params[1], params[2], params[5]
+    n_sonar, n_sub = ray_offsets.shape
+    for s in range(n_sonar):
+        theta = h + 0.5 * (ray_offsets[s, 0] + ray_offsets[s, n_sub - 1])
+        best = cone_nearest(x, y, theta, half, walls, near, n_near)
+        who = -1
+        for q in range(n_r):
+            j = near_r[q]
+            d = cone_circle(x, y, theta, half, robots[j, 0], robots[j, 1], radius)
+            if d < best:
+                best = d
+                who = j
+        nearest = min(best, length)
+        hitless = nearest > length - 1e-9
+        who = -1 if hitless else who
+        rays[s, :] = nearest
+        ray_robot[s, :] = who
+        raw[s] = far if hitless else nearest - radius
+        sonar_robot[s] = who
+
+
+@numba.njit(cache=True, inline="always")
+def _sense_sub_arcs_among(
+    x: float, y: float, ray_offsets: np.ndarray, params: np.ndarray, walls: np.ndarray,
+    near: np.ndarray, n_near: int, raw: np.ndarray, rays: np.ndarray, trig: np.ndarray,
+    ray_cos: np.ndarray, robots: np.ndarray, near_r: np.ndarray, n_r: int,
+    ray_robot: np.ndarray, sonar_robot: np.ndarray,
+) -> None:  # fmt: skip
+    """:func:`_sense_sub_arcs` with the robots ``near_r[:n_r]``: each ray's first wall,
+    then the robots' circles (a robot wins when strictly nearer: the reference asks the
+    static walls first); the robot each ray hit, and the one the sonar's nearest ray (the
+    first at the least distance) hit, -1 for a wall, nothing, or a reading out of range.
+    The incidence cosine on a robot is taken on its circle's normal. Robots are culled
+    per sonar to those whose circle reaches the fan of its rays (the sonar arc is below
+    180 degrees: a point no farther than ``R`` plus the cull margin from the fan), and per
+    ray by their distance from its line
+    (:func:`~koolio_pymunk.world.segment_query.off_the_line`), as
+    :func:`~koolio_pymunk.world.segment_query.first_robot_hit` asks them."""
+    length, radius, far = params[0], params[1], params[2]
+    incidence = params[6] == 1.0
+    n_sonar, n_sub = ray_offsets.shape
+    n_rays = n_sonar * n_sub
+    active = np.empty(walls.shape[0], np.int64)
+    active_r = np.empty(n_r, np.int64)
+    ends = np.empty((n_sub, 2))
+    for s in range(n_sonar):
+        x0 = x1 = x
+        y0 = y1 = y
+        for i in range(n_sub):
+            ex = x + length * trig[1 + s * n_sub + i]
+            ey = y + length * trig[1 + n_rays + s * n_sub + i]
+            ends[i, 0] = ex
+            ends[i, 1] = ey
+            x0 = min(x0, ex)
+            x1 = max(x1, ex)
+            y0 = min(y0, ey)
+            y1 = max(y1, ey)
+        n = walls_in_box(x0, y0, x1, y1, walls, near, n_near, active)
+        # the robots whose circle reaches the fan between the first and last rays (the
+        # half-planes of their lines and the one ahead, grown by R and the cull margin)
+        fx = trig[1 + s * n_sub]
+        fy = trig[1 + n_rays + s * n_sub]
+        lx = trig[n_sub + s * n_sub]
+        ly = trig[n_rays + n_sub + s * n_sub]
+        grow = radius + CULL_MARGIN
+        m = 0
+        for q in range(n_r):
+            jj = near_r[q]
+            vx = robots[jj, 0] - x
+            vy = robots[jj, 1] - y
+            if fx * vy - fy * vx < -grow or lx * vy - ly * vx > grow:
+                continue
+            if (fx + lx) * vx + (fy + ly) * vy < -2.0 * grow:
+                continue
+            active_r[m] = jj
+            m += 1
+        nearest = np.inf
+        who = -1
+        for i in range(n_sub):
+            ex = ends[i, 0]
+            ey = ends[i, 1]
+            alpha, k = first_hit(x, y, ex - x, ey - y, walls, active, n)
+            j = -1  # first_robot_hit written out: an array passed per ray costs its refcounts
+            nx = 0.0
+            ny = 0.0
+            for q in range(m):
+                jj = active_r[q]
+                cx = robots[jj, 0]
+                cy = robots[jj, 1]
+                if off_the_line(cx - x, cy - y, ex - x, ey - y, radius):
+                    continue
+                hit, a, cnx, cny = circle_shape_query(cx, cy, radius, x, y, ex, ey, 0.0)
+                if hit and a < alpha:
+                    alpha = a
+                    j = jj
+                    nx = cnx
+                    ny = cny
+            d = alpha * length
+            rays[s, i] = d
+            ray_robot[s, i] = j
+            if d < nearest:
+                nearest = d
+                who = j
+            if incidence:
+                c = trig[1 + s * n_sub + i]
+                sn = trig[1 + n_rays + s * n_sub + i]
+                if j >= 0:
+                    ray_cos[s, i] = abs(c * nx + sn * ny)
+                else:
+                    ray_cos[s, i] = abs(c * walls[k, 4] + sn * walls[k, 5]) if k >= 0 else 0.0
+        hitless = nearest > length - 1e-9
+        raw[s] = far if hitless else nearest - radius
+        sonar_robot[s] = -1 if hitless else who
+
+
+@numba.njit(cache=True)
+def sense_among(x: float, y: float, h: float, geometry: tuple, goal: np.ndarray,
+                plates: np.ndarray, buffers: tuple, others: tuple) -> None:  # fmt: skip
+    """:func:`sense_one` in a shared world: the other robots of ``others`` (module doc)
+    are surfaces to the sonars and block the cameras' sight lines; also writes
+    ``others``' ``ray_robot`` and ``sonar_robot``."""
+    ray_offsets, ray_units, params, camera_dirs, markers, walls = geometry
+    raw, rays, eow_k, trig, ray_cos, decoy = buffers
+    robots, present, me, ray_robot, sonar_robot = others
+    length = params[0]
+    radius = params[1]
+    far = params[2]
+    half_arc = params[3]
+    n_sonar = ray_offsets.shape[0]
+    n_cam = camera_dirs.shape[0]
+    near = np.empty(walls.shape[0], np.int64)
+    n_near = near_walls(x, y, length, walls, near)
+    near_r = np.empty(robots.shape[0], np.int64)
+    n_r = robots_near(x, y, length + radius, robots, present, me, near_r)
+    if params[4] == 1.0:
+        _sense_cones_among(x, y, h, ray_offsets, params, walls, near, n_near, raw, rays, robots,
+                           near_r, n_r, ray_robot, sonar_robot)  # fmt: skip
+    else:
+        directions = _ray_directions(h, ray_units, trig)
+        _sense_sub_arcs_among(x, y, ray_offsets, params, walls, near, n_near, raw, rays,
+                              directions, ray_cos, robots, near_r, n_r, ray_robot,
+                              sonar_robot)  # fmt: skip
+    scene = (walls, robots, present, me, radius)
+    goal2 = goal.reshape(1, 2)
+    for c in range(n_cam):
+        direction = h + camera_dirs[c]
+        raw[n_sonar + c] = camera_reading_among(x, y, direction, goal2, half_arc, radius, far,
+                                                scene)[0]  # fmt: skip
+        d, k = camera_reading_among(x, y, direction, markers, half_arc, radius, far, scene)
+        raw[n_sonar + n_cam + c] = d
+        eow_k[c] = k
+        if plates.shape[0] > 0:
+            decoy[c] = camera_reading_among(x, y, direction, plates, half_arc, radius, far,
+                                            scene)[0]  # fmt: skip
+    raw[n_sonar + 2 * n_cam] = (h / TWO_PI) * 256.0
+
+
+#: :func:`sense_among` compiled into its hot callers (:func:`sense_one_inline`'s twin).
+sense_among_inline = inline_twin(
+    sense_among, near_walls=inline_twin(near_walls), robots_near=inline_twin(robots_near)
+)

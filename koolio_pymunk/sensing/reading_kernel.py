@@ -18,6 +18,19 @@ reference counts each way, about 0.2 µs, at every step; rows of shared arrays c
 nothing.) :meth:`ReadingArrays.load` takes a suite's configuration after its reset;
 :meth:`ReadingArrays.store` gives it the last reading made in the rows, so that the suite's
 :meth:`~koolio_pymunk.sensing.suite.SensorSuite.last` reads it.
+
+**A shared world** (robots that see each other): :func:`sense_reading_among` is
+:func:`sense_reading` with one more group, ``others`` =
+``(robots, present, me, ray_robot, sonar_robot)``
+(:data:`~koolio_pymunk.sensing.sensor_arrays.OTHERS`; :func:`~.ray_kernel.sense_among`):
+the ``(N, 2)`` centres of all the robots and their ``(N,)`` flags (in the arena or
+parked), which the caller keeps current, the reading robot's index, and the two buffers
+the reading writes (per ray and per sonar, the robot hit; -1: a wall or nothing).
+:func:`robot_others` makes robot ``r``'s group from :attr:`ReadingArrays.robot_rows` in
+compiled code, as :func:`robot_group` makes its reading group, and :func:`robot_bump`
+says whether a reading's Bump came from a robot. The same draws, in the same order, as
+:func:`sense_reading`: a shared world changes what the rays meet, not the generator's
+stream.
 """
 
 from __future__ import annotations
@@ -27,8 +40,8 @@ import numpy as np
 
 from ..store.kernel_cache import ensure_fresh
 from .encoding_kernel import readout_inline
-from .ray_kernel import sense_one_inline
-from .realism_kernel import sense_realism
+from .ray_kernel import sense_among_inline, sense_one_inline
+from .realism_kernel import sense_realism, sense_realism_among
 
 ensure_fresh()  # numba's cache, in step with every kernel's source (see there)
 
@@ -75,6 +88,52 @@ def sense_reading(x: float, y: float, h: float, rng, sense: tuple) -> tuple[int,
     return readout_inline(buffers[0], noise, encoding, out, buffers[2], codes)
 
 
+@numba.njit(cache=True)
+def sense_reading_among(
+    x: float, y: float, h: float, rng, sense: tuple, others: tuple
+) -> tuple[int, bool, bool]:
+    """:func:`sense_reading` of robot ``others[2]`` in a shared world (the module doc):
+    the other robots of ``others`` seen, each sonar's robot (-1: none) left in its
+    ``sonar_robot``; the same draws."""
+    geometry, goal, plates, buffers, encoding, realism, noise, out, codes, flags, u = sense
+    real_on, gaussian, n_raw, n_draws = flags[0] == 1, flags[1] == 1, flags[2], flags[3]
+    if real_on:
+        if gaussian:
+            for i in range(n_raw):
+                noise[i] = rng.standard_normal()
+            for i in range(n_draws):
+                u[i] = rng.random()
+        else:
+            for i in range(n_raw + n_draws):
+                u[i] = rng.random()
+        return sense_realism_among(x, y, h, geometry, goal, plates, buffers, noise, u,
+                                   not gaussian, realism, encoding, out, codes,
+                                   others)  # fmt: skip
+    sense_among_inline(x, y, h, geometry, goal, plates, buffers, others)
+    if gaussian:
+        for i in range(n_raw):
+            noise[i] = rng.standard_normal()
+    else:
+        for i in range(n_raw):
+            noise[i] = rng.uniform(-1.0, 1.0)
+    return readout_inline(buffers[0], noise, encoding, out, buffers[2], codes)
+
+
+@numba.njit(cache=True, inline="always")
+def robot_bump(sense: tuple, others: tuple) -> bool:
+    """The last reading of ``sense`` (:func:`reading_group`) read Bump from a robot: a
+    sonar whose noised reading is below the first sonar threshold (the Bump rule) read a
+    robot's surface (``others``' ``sonar_robot``, :func:`sense_reading_among`)."""
+    encoding, out = sense[4], sense[7]
+    n_sonar, bump_below = encoding[1], encoding[3][0]
+    sonar_robot = others[4]
+    found = False
+    for s in range(n_sonar):
+        if out[s] < bump_below and sonar_robot[s] >= 0:
+            found = True
+    return found
+
+
 class ReadingArrays:
     """The reading inputs of N sensor suites of one configuration, a row per robot
     (module doc): ``shared`` and ``rows`` are :func:`robot_group`'s arguments."""
@@ -113,6 +172,12 @@ class ReadingArrays:
             np.zeros((n, k.n_raw + real.n_draws)),  # the realism path's draws
         )
         """Per robot: :func:`robot_group`'s rows."""
+        self.robot_rows = (
+            np.full((n, *k.ray_robot.shape), -1, np.int64),
+            np.full((n, *k.sonar_robot.shape), -1, np.int64),
+        )
+        """Per robot, in a shared world: the robot each ray hit and each sonar read
+        (-1: a wall or nothing): :func:`robot_others`' rows."""
 
     def load(self, r: int, suite) -> None:
         """Robot ``r``'s configuration from ``suite`` (after its reset: a
@@ -134,12 +199,18 @@ class ReadingArrays:
         """``suite``'s last reading (made in Python: a reset's) into robot ``r``'s rows."""
         for i, buf in self._buffers(suite):
             self.rows[i][r] = buf
+        k = suite.kernel
+        self.robot_rows[0][r] = k.ray_robot
+        self.robot_rows[1][r] = k.sonar_robot
 
     def store(self, r: int, suite) -> None:
         """Robot ``r``'s last reading into ``suite``'s buffers (its :meth:`last` then
         reads it)."""
         for i, buf in self._buffers(suite):
             buf[...] = self.rows[i][r]
+        k = suite.kernel
+        k.ray_robot[...] = self.robot_rows[0][r]
+        k.sonar_robot[...] = self.robot_rows[1][r]
         suite.forget_last()
 
     @staticmethod
@@ -162,3 +233,12 @@ def robot_group(r: int, shared: tuple, rows: tuple) -> tuple:
     realism = (rparams[r], rflags[r], neighbours, echo[r], crossed[r], missed[r], misread[r])
     return (geometry, goal[r], plates[r, : n_plates[r]], buffers, encoding, realism, noise[r],
             out[r], codes[r], flags[r], u[r])  # fmt: skip
+
+
+@numba.njit(cache=True, inline="always")
+def robot_others(r: int, robots: np.ndarray, present: np.ndarray, robot_rows: tuple) -> tuple:
+    """Robot ``r``'s ``others`` group for :func:`sense_reading_among`: every robot's
+    centre ``robots`` (``(N, 2)`` float64) and flag ``present`` (``(N,)`` bool: in the
+    arena), ``r`` itself, and its rows of :attr:`ReadingArrays.robot_rows`."""
+    ray_robot, sonar_robot = robot_rows
+    return (robots, present, r, ray_robot[r], sonar_robot[r])

@@ -308,6 +308,41 @@ def apply_reference(
     return RealReading(out, echo, crossed, missed, misread)
 
 
+def robot_sources(
+    model: SensorRealism,
+    rays: np.ndarray,
+    echo: np.ndarray,
+    crossed: np.ndarray,
+    ray_robot: np.ndarray,
+    draws: np.ndarray,
+    ideal: np.ndarray,
+) -> np.ndarray:
+    """Per sonar, the robot whose surface its reading comes from after the sonar models
+    (a shared world; -1: a wall, or no echo): the reference.
+
+    ``ideal`` is the noise-free reading's (the nearest ray's robot), kept when no sonar
+    model is on. With one on, a sonar reads its nearest *echoing* ray (the first at the
+    least distance among those :func:`apply_reference` says echoed: ``echo``), so its
+    source is that ray's robot (``ray_robot``), -1 when none echoed; a sonar that took a
+    neighbour's echo (``crossed``, crosstalk) takes the neighbour's source, the neighbour
+    its draw chose. The beam model, the minimum range and the paper's noise change the
+    distance read, not where the echo came from.
+    """
+    if not model.flags[F_SONAR]:
+        return ideal.copy()
+    n = rays.shape[0]
+    masked = np.where(echo, rays, np.inf)
+    first = masked.argmin(axis=1)
+    source = np.where(np.isinf(masked.min(axis=1)), -1, ray_robot[np.arange(n), first])
+    out = source.copy()
+    chance = model.params[P_CROSSTALK]
+    for s in np.flatnonzero(crossed):
+        u = draws[4 * s + 3]
+        nb = model.neighbours[s, 0] if u < chance * 0.5 else model.neighbours[s, 1]
+        out[s] = source[nb]
+    return out
+
+
 def _crosstalk(
     z: np.ndarray, draws: np.ndarray, neighbours: np.ndarray, chance: float
 ) -> tuple[np.ndarray, np.ndarray]:

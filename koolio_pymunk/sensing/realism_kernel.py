@@ -13,6 +13,11 @@ one call, finding the other plates in view only for a camera whose misread draw 
 The parameter layout (``params``, ``flags``) is
 :class:`koolio_pymunk.sensing.realism.SensorRealism`'s.
 
+In a shared world :func:`sense_realism_among` is the same reading with the other robots
+(:func:`~.ray_kernel.sense_among`) and :func:`sonar_sources`, the compiled
+:func:`~koolio_pymunk.sensing.realism.robot_sources`: which robot each sonar's reading
+came from once the echo and crosstalk models chose it.
+
 **One compiled function per reading.** A numba call that passes arrays increments and
 decrements each array's reference count, an atomic operation: with the models in
 functions of their own, a third of a realistic reading's perf samples were in
@@ -34,7 +39,12 @@ import numpy as np
 
 from ..store.kernel_cache import ensure_fresh
 from .encoding_kernel import readout_inline
-from .ray_kernel import camera_reading_inline, sense_one_inline
+from .ray_kernel import (
+    camera_reading_among,
+    camera_reading_inline,
+    sense_among_inline,
+    sense_one_inline,
+)
 from .realism import (
     F_BEAM,
     F_CAMERA,
@@ -286,5 +296,72 @@ def sense_realism(x: float, y: float, h: float, geometry: tuple, goal: np.ndarra
             decoy[c] = camera_reading_inline(x, y, direction, plates, params[3], params[1], far,
                                              walls)[0]  # fmt: skip
     _sonar(raw, rays, ray_cos, u, base, rparams, rflags, neighbours, echo, crossed)
+    _cameras(raw, n_sonar, decoy, u, base, rparams, rflags, missed, misread)
+    return readout_inline(raw, noise, encoding, out, eow_k, codes)
+
+
+@numba.njit(cache=True, inline="always")
+def sonar_sources(
+    rays: np.ndarray, echo: np.ndarray, crossed: np.ndarray, ray_robot: np.ndarray,
+    draws: np.ndarray, base: int, p: np.ndarray, f: np.ndarray, neighbours: np.ndarray,
+    sonar_robot: np.ndarray,
+) -> None:  # fmt: skip
+    """:func:`~koolio_pymunk.sensing.realism.robot_sources` in place: ``sonar_robot``
+    (the noise-free reading's sources) rewritten, when a sonar model is on, from the
+    echoes and the crosstalk :func:`_sonar` left (its draws at ``base``)."""
+    if not f[F_SONAR]:
+        return
+    n, n_sub = rays.shape
+    for s in range(n):
+        best = np.inf
+        who = -1
+        for i in range(n_sub):
+            if echo[s, i] and rays[s, i] < best:
+                best = rays[s, i]
+                who = ray_robot[s, i]
+        sonar_robot[s] = who
+    if f[F_CROSSTALK]:
+        before = sonar_robot.copy()
+        chance = p[P_CROSSTALK]
+        for s in range(n):
+            if crossed[s]:
+                u = draws[base + 4 * s + 3]
+                nb = neighbours[s, 0] if u < chance * 0.5 else neighbours[s, 1]
+                sonar_robot[s] = before[nb]
+
+
+@numba.njit(cache=True, inline="always")
+def sense_realism_among(x: float, y: float, h: float, geometry: tuple, goal: np.ndarray,
+                        plates: np.ndarray, buffers: tuple, noise: np.ndarray, u: np.ndarray,
+                        noise_from_u: bool, realism: tuple, encoding: tuple, out: np.ndarray,
+                        codes: np.ndarray, others: tuple) -> tuple[int, bool, bool]:  # fmt: skip
+    """:func:`sense_realism` in a shared world: the reading with the other robots of
+    ``others`` (:func:`~.ray_kernel.sense_among`; they block the misread model's other
+    plates too), the models, then each sonar's source (:func:`sonar_sources`) into
+    ``others``' ``sonar_robot``."""
+    params, camera_dirs, walls = geometry[2], geometry[3], geometry[5]
+    raw, rays, eow_k, _, ray_cos, decoy = buffers
+    rparams, rflags, neighbours, echo, crossed, missed, misread = realism
+    robots, present, me, ray_robot, sonar_robot = others
+    n_sonar = encoding[1]
+    m = raw.shape[0]
+    base = 0  # where the realism uniforms start in u
+    if noise_from_u:
+        for i in range(m):
+            noise[i] = -1.0 + 2.0 * u[i]
+        base = m
+    sense_among_inline(x, y, h, geometry, goal, plates[:0], buffers, others)
+    far = params[2]
+    misread_on, misread_chance = rflags[F_MISREAD], rparams[P_MISREAD]
+    scene = (walls, robots, present, me, params[1])
+    for c in range(camera_dirs.shape[0]):
+        decoy[c] = far
+        if misread_on and u[base + 4 * n_sonar + 3 * c] < misread_chance:
+            direction = h + camera_dirs[c]
+            decoy[c] = camera_reading_among(x, y, direction, plates, params[3], params[1], far,
+                                            scene)[0]  # fmt: skip
+    _sonar(raw, rays, ray_cos, u, base, rparams, rflags, neighbours, echo, crossed)
+    sonar_sources(rays, echo, crossed, ray_robot, u, base, rparams, rflags, neighbours,
+                  sonar_robot)  # fmt: skip
     _cameras(raw, n_sonar, decoy, u, base, rparams, rflags, missed, misread)
     return readout_inline(raw, noise, encoding, out, eow_k, codes)

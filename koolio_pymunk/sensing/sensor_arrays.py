@@ -15,7 +15,9 @@ them once per sensor suite (:class:`~.reading_kernel.ReadingArrays` stacks N rob
 * **encoding** (:data:`ENCODING`): the read-out's noise fractions, limits, thresholds,
   sonar groups and key layout;
 * **realism** (:data:`REALISM`): the sonar and camera models' parameters and what they
-  report of a reading (:class:`~koolio_pymunk.sensing.realism.SensorRealism`'s layout).
+  report of a reading (:class:`~koolio_pymunk.sensing.realism.SensorRealism`'s layout);
+* **others** (:data:`OTHERS`, a shared world's readings only): the other robots and
+  which of them the reading met (:func:`~koolio_pymunk.sensing.ray_kernel.sense_among`).
 
 >>> GEOMETRY
 ('ray_offsets', 'ray_units', 'params', 'camera_dirs', 'markers', 'walls')
@@ -40,6 +42,13 @@ ENCODING = (
 #: The realism models' parameters and flags, sonar neighbours, then what they report:
 #: echo per ray, crosstalk per sonar, missed detections and misreads per camera.
 REALISM = ("params", "flags", "neighbours", "echo", "crossed", "missed", "misread")
+
+
+#: Every robot's centre (``(N, 2)`` float64, the reader's own row ignored), whether each
+#: is in the arena (``(N,)`` bool), the reading robot's index; written: the robot each
+#: sub-arc ray hit (n_sonar x sub_arcs) and each sonar read (n_sonar), -1 for a wall or
+#: nothing.
+OTHERS = ("robots", "present", "me", "ray_robot", "sonar_robot")
 
 
 def bundle(fields: tuple[str, ...], source: object, **values: object) -> tuple:

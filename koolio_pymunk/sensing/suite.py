@@ -37,6 +37,17 @@ sides).
 >>> np.round(c, 12).tolist(), np.round(s, 12).tolist()
 ([0.0, -1.0], [1.0, 0.0])
 
+**Other robots** (a shared world, ``World(..., shared=True)``): the suite of robot
+``robot`` sees the other robots in the arena as the walls are seen: a sonar ray ends on
+the nearest surface, wall or robot; a robot blocks a camera's sight line. Each reading
+also says, per sonar, which robot its reading came from (:attr:`Readings.sonar_robot`,
+-1: a wall or nothing; with the realism models, the echo they chose), and
+:meth:`SensorSuite.robot_bump` whether a Bump came from a robot. The reference asks
+pymunk (:class:`~.ray_engines.PymunkRays` over the shared space); the compiled path
+(:func:`~.ray_kernel.sense_among`) reads the world's :attr:`World.xy
+<koolio_pymunk.world.physics.World.xy>` and :attr:`~koolio_pymunk.world.physics.World.present`
+at each reading. An isolated world's suite is what it was, bit for bit and in speed.
+
 Sonar groups (paper: 1&2 and 5&6) are averaged before encoding. The state is the tuple
 of codes in keyword order: goal cameras, end-of-world cameras, sonar groups (then the
 compass if ``compass.in_state``).
@@ -72,7 +83,7 @@ from ..store.errors import ConfigError
 from ..store.realism_config import RealismConfig
 from ..world.arena import Point
 from ..world.physics import World
-from .realism import SensorRealism, apply_reference
+from .realism import SensorRealism, apply_reference, robot_sources
 from .sensor_arrays import BUFFERS, ENCODING, GEOMETRY, REALISM, bundle
 
 # The compiled kernels (ray_kernel.py, encoding_kernel.py) import numba, which takes a large part of
@@ -108,6 +119,9 @@ class Readings:
     """Per camera ``[goal, end-of-world]``: a target in view was not detected."""
     misread: np.ndarray = field(default_factory=lambda: np.zeros(0, np.bool_))
     """Per camera: its goal reading is another door's plate."""
+    sonar_robot: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    """Per sonar: the robot whose surface its reading came from, in a shared world (-1: a
+    wall, or nothing; always -1 in an isolated world)."""
 
 
 class SensorSuite:
@@ -172,7 +186,7 @@ class SensorSuite:
         from .encoding_kernel import wrap_compass
         from .ray_engines import make_engine
 
-        self.engine = make_engine(self.backend, world)
+        self.engine = make_engine(self.backend, world, robot)
         self._wrap_compass = wrap_compass
         self.plates = [(float(p[0]), float(p[1])) for p in plates]
         """The other doors' plates (a misread camera may take one for the goal)."""
@@ -203,7 +217,8 @@ class SensorSuite:
         """Read every sensor at ``pose``; all noise is drawn from ``rng``."""
         x, y, h = pose
         g = self.geometry(x, y, h)
-        return self.finish(g.raw, g.rays, g.targets, rng, g.ray_cos, g.decoy)
+        return self.finish(g.raw, g.rays, g.targets, rng, g.ray_cos, g.decoy, g.ray_robot,
+                           g.sonar_robot)  # fmt: skip
 
     def finish(
         self,
@@ -213,20 +228,29 @@ class SensorSuite:
         rng: np.random.Generator,
         ray_cos: np.ndarray | None = None,
         decoy: np.ndarray | None = None,
+        ray_robot: np.ndarray | None = None,
+        sonar_robot: np.ndarray | None = None,
     ) -> Readings:
         """The realism models, noise and camera limit applied to a :meth:`raw` reading.
 
         Draw order: the paper's noise (one call), then, with a realism model on, the
         realism uniforms (one call); ``ray_cos`` and ``decoy`` are :meth:`geometry`'s
-        (needed with the incidence and misread models)."""
+        (needed with the incidence and misread models), ``ray_robot`` and
+        ``sonar_robot`` too (a shared world's robots hit; none: -1)."""
         e = self.draw_noise(rng, raw.shape[0]) * self._noise_scale
         real = None
+        if ray_robot is None:
+            ray_robot = np.full(rays.shape, -1, np.int64)
+        if sonar_robot is None:
+            sonar_robot = np.full(self.n_sonar, -1, np.int64)
         if self.realism.on:
             u = rng.random(self.realism.n_draws)
             ray_cos = np.zeros(rays.shape) if ray_cos is None else ray_cos
             decoy = np.full(self.n_camera, self.far) if decoy is None else decoy
             real = apply_reference(self.realism, raw, rays, ray_cos, decoy, u)
             raw = real.raw
+            sonar_robot = robot_sources(self.realism, rays, real.echo, real.crosstalk,
+                                        ray_robot, u, sonar_robot)  # fmt: skip
         noised = self._noised(raw, e)
         n, m = self.n_sonar, self.n_camera
         goal_n = self._camera_limit(noised[n : n + m], raw[n : n + m])
@@ -243,6 +267,7 @@ class SensorSuite:
             crosstalk=np.zeros(n, np.bool_) if real is None else real.crosstalk,
             missed=np.zeros((m, 2), np.bool_) if real is None else real.missed,
             misread=np.zeros(m, np.bool_) if real is None else real.misread,
+            sonar_robot=sonar_robot,
         )
 
     def echoes(self, rays: np.ndarray) -> np.ndarray:
@@ -265,18 +290,29 @@ class SensorSuite:
                 [],
                 np.zeros(self.ray_offsets.shape),
                 np.full(self.n_camera, self.far),
+                np.full(self.ray_offsets.shape, -1, np.int64),
+                np.full(self.n_sonar, -1, np.int64),
             )
             eow_k = np.empty(self.n_camera, np.int64)
-            k.sense(x, y, h, g.raw, g.rays, eow_k, g.ray_cos, g.decoy)
+            k.sense(x, y, h, g.raw, g.rays, eow_k, g.ray_cos, g.decoy, g.ray_robot,
+                    g.sonar_robot)  # fmt: skip
             g.targets = eow_k.tolist()
             return g
         ray_cos = np.zeros(self.ray_offsets.shape)
-        if self.realism.incidence:
+        ray_robot = np.full(self.ray_offsets.shape, -1, np.int64)
+        if self.world.shared:
+            rays, cos, ray_robot = self.engine.cast_hits(x, y, self.ray_dirs(h), self.ray_length)
+            if self.realism.incidence:
+                ray_cos = cos
+        elif self.realism.incidence:
             rays, ray_cos = self.engine.cast_incidence(x, y, self.ray_dirs(h), self.ray_length)
         else:
             rays = self.cast_sonar(x, y, h)
+        hitless = rays.min(axis=1) > self.ray_length - 1e-9
         sonar = rays.min(axis=1) - self.radius
-        sonar = np.where(rays.min(axis=1) > self.ray_length - 1e-9, self.far, sonar)
+        sonar = np.where(hitless, self.far, sonar)
+        nearest = ray_robot[np.arange(self.n_sonar), rays.argmin(axis=1)]  # the first nearest
+        sonar_robot = np.where(hitless, -1, nearest)
         goal = np.empty(self.n_camera)
         eow = np.empty(self.n_camera)
         decoy = np.full(self.n_camera, self.far)
@@ -291,7 +327,7 @@ class SensorSuite:
                 decoy[c] = self._camera_distance(x, y, direction, self.plates)[0]
         compass = (h / (2.0 * math.pi)) * 256.0
         raw = np.concatenate([sonar, goal, eow, [compass]])
-        return Geometry(raw, rays, targets, ray_cos, decoy)
+        return Geometry(raw, rays, targets, ray_cos, decoy, ray_robot, sonar_robot)
 
     def sense(
         self, pose: tuple[float, float, float], rng: np.random.Generator
@@ -351,6 +387,11 @@ class SensorSuite:
     def bump(self, r: Readings) -> bool:
         """True when any single sonar reads Bump (paper: the Bump reward and pink robot)."""
         return bool((r.sonar < self.sonar_thresholds[0]).any())
+
+    def robot_bump(self, r: Readings) -> bool:
+        """True when a sonar that reads Bump read another robot (a shared world; the
+        compiled twin is :func:`~.reading_kernel.robot_bump`)."""
+        return bool(((r.sonar < self.sonar_thresholds[0]) & (r.sonar_robot >= 0)).any())
 
     def goal_close(self, r: Readings) -> bool:
         """True when the front camera (camera 0) reads the goal Close."""
@@ -455,12 +496,17 @@ class Geometry:
     """Per ray: cosine of its incidence on the wall it hits (0 where not computed)."""
     decoy: np.ndarray
     """Per camera: the nearest other door's plate in view (far: none, or not computed)."""
+    ray_robot: np.ndarray | None = None
+    """Per ray: the robot it hit in a shared world (-1: a wall, or nothing)."""
+    sonar_robot: np.ndarray | None = None
+    """Per sonar: the robot its noise-free reading came from (-1: a wall, or nothing)."""
 
 
 class KernelInputs:
     """Arrays and buffers of one :class:`SensorSuite` for the compiled kernels.
 
-    ``sense(x, y, h, raw, rays, eow_k, ray_cos, decoy)`` is :func:`ray_kernel.sense_one`;
+    ``sense(x, y, h, raw, rays, eow_k, ray_cos, decoy)`` is :func:`ray_kernel.sense_one`
+    (:func:`ray_kernel.sense_among` in a shared world, with :attr:`others`);
     ``sense_readout(pose, rng)`` adds the noise draws and :func:`encoding_kernel.readout`,
     or, when a realism model is on, is :func:`realism_kernel.sense_realism` (the
     reading, the models and the read-out in one call).
@@ -501,6 +547,22 @@ class KernelInputs:
         self._sense_one = sense_one
         self._readout = readout
         self._sense_realism_kernel = sense_realism
+        self.shared = bool(s.world.shared)
+        """The suite's robot shares its arena with others (:attr:`others`)."""
+        self.ray_robot = np.full(self.ray_offsets.shape, -1, np.int64)
+        self.sonar_robot = np.full(s.n_sonar, -1, np.int64)
+        self.others = None
+        """In a shared world, :func:`ray_kernel.sense_among`'s ``others`` group: the
+        world's robots' centres and flags (live), the suite's robot, the buffers
+        :attr:`ray_robot` and :attr:`sonar_robot`; None in an isolated world."""
+        if self.shared:
+            from .ray_kernel import sense_among
+            from .realism_kernel import sense_realism_among
+
+            w = s.world
+            self.others = (w.xy, w.present, s.robot, self.ray_robot, self.sonar_robot)
+            self._sense_among = sense_among
+            self._sense_realism_kernel = sense_realism_among
         self.trig = new_trig(self.ray_offsets.size)
         self.pose = (0.0, 0.0, 0.0)
         self.sonar_thresholds = s.sonar_thresholds
@@ -552,6 +614,8 @@ class KernelInputs:
         eow_k: np.ndarray,
         ray_cos: np.ndarray | None = None,
         decoy: np.ndarray | None = None,
+        ray_robot: np.ndarray | None = None,
+        sonar_robot: np.ndarray | None = None,
     ) -> None:
         if ray_cos is None and decoy is None and raw is self.raw:
             buffers = self.buffers
@@ -559,6 +623,15 @@ class KernelInputs:
             ray_cos = self.ray_cos if ray_cos is None else ray_cos
             decoy = self.decoy if decoy is None else decoy
             buffers = (raw, rays, eow_k, self.trig, ray_cos, decoy)
+        if self.shared:
+            others = self.others
+            if ray_robot is not None or sonar_robot is not None:
+                ray_robot = self.ray_robot if ray_robot is None else ray_robot
+                sonar_robot = self.sonar_robot if sonar_robot is None else sonar_robot
+                others = (*others[:3], ray_robot, sonar_robot)
+            self._sense_among(float(x), float(y), float(h), self.geometry, self.goal,
+                              self.plates, buffers, others)  # fmt: skip
+            return
         self._sense_one(float(x), float(y), float(h), self.geometry, self.goal, self.plates,
                         buffers)  # fmt: skip
 
@@ -588,6 +661,12 @@ class KernelInputs:
             u = rng.random(n_draws)
         else:
             u = rng.random(self.n_raw + n_draws)
+        if self.shared:
+            return self._sense_realism_kernel(
+                float(x), float(y), float(h), self.geometry, self.goal, self.plates,
+                self.buffers, self.noise, u, not self.gaussian, self.realism, self.encoding,
+                self.out, self.codes, self.others,
+            )  # fmt: skip
         return self._sense_realism_kernel(
             float(x), float(y), float(h), self.geometry, self.goal, self.plates, self.buffers,
             self.noise, u, not self.gaussian, self.realism, self.encoding, self.out, self.codes,
@@ -609,6 +688,7 @@ class KernelInputs:
             crosstalk=self.crossed.copy() if real else np.zeros(n, np.bool_),
             missed=self.missed.copy() if real else np.zeros((m, 2), np.bool_),
             misread=self.misread.copy() if real else np.zeros(m, np.bool_),
+            sonar_robot=self.sonar_robot.copy(),
         )
         return r, tuple(int(c) for c in self.codes)
 

@@ -48,14 +48,44 @@ smallest ``alpha`` of the others is the contact (:meth:`World.first_contact`).
 operation for operation in compiled code; ``tests/world/test_segment_query.py`` and
 ``tools/agreement.py --moves`` hold the two to the same end positions bit for bit.
 
-Several robots may share the world (``n_robots``): each has its own circle body in the
-same space and lives in its own copy of the arena: robot ``k``'s walls are the arena's
-shifted by ``k * spacing`` along x (a power of two wider than the arena), and its moves
-ask only its own motion space. :meth:`pose`, :meth:`place`, :attr:`x` and
+**Several robots, isolated** (``n_robots``, the default): each has its own circle body in
+the same space and lives in its own copy of the arena: robot ``k``'s walls are the
+arena's shifted by ``k * spacing`` along x (a power of two wider than the arena), and its
+moves ask only its own motion space. :meth:`pose`, :meth:`place`, :attr:`x` and
 :meth:`wall_clearance` speak the arena's own coordinates; robot 0's copy is the arena
 itself (``walls``). The robots' bodies are pymunk bodies whose positions the moves set
 and whose shapes they reindex (the space is never stepped), so the viewer and pymunk's
 own queries see them where they are.
+
+**Several robots sharing the arena** (``shared=True``): one copy of the walls, and every
+robot's circle body in the one space, each a body to the others:
+
+* *In the arena or parked.* A robot of a shared world is in the arena from
+  :meth:`place` until :meth:`park` (its episode ended and it left): :attr:`present`
+  says which, :attr:`xy` holds every robot's centre (both numpy arrays, kept current,
+  what the compiled twins take). A parked robot is no obstacle and no sensor target
+  (its shape's filter has no category, so no query sees it); a new world's robots are
+  all parked until placed.
+* *A move stops at another robot as at a wall.* Another robot is, for the mover's
+  centre, a disc of radius ``2R`` at its centre (the Minkowski sum of two circles of
+  radius ``R``): Chipmunk's ``cpShapeSegmentQuery`` of the other robot's own circle
+  (radius ``R``) with a query of radius ``R`` (``CircleSegmentQuery`` with ``r1 + r2 =
+  2R``: the same numbers as a radius-0 query of a ``2R`` disc, and the normal from the
+  other robot's surface towards the mover when the move starts touching it). Each
+  present robot is asked in index order after the walls' contact
+  (:meth:`first_contact`): the smallest alpha wins, the walls on a tie, then the lower
+  index. The push-out (:data:`SKIN`), the slide along the tangent and the corner rule of
+  :func:`sweep` are the walls'. So a robot driving into another stops with the centres
+  ``2R + SKIN`` apart and slides along it, never overlaps it beyond rounding, and never
+  squeezes between two robots, or a robot and a wall, closer than its diameter.
+* *Touching a robot* is the walls' rule mirrored: a move that starts with the centres
+  within ``2R`` (Chipmunk answers alpha 0 and the normal from the other robot's nearest
+  surface point) is held by that robot only if it goes into it (:data:`ALONG`); a move
+  away from it or along it is free. (Centres closer than ``R``, which no move makes,
+  turn that normal round; centres at the same point have none, and pass.)
+* *Sensors see other robots* (:meth:`sensor_filter`): the robot's circle is in the
+  robots' category and in a group of its own (``i + 1``: :meth:`robot_of` reads the index
+  back from a hit), so a robot's rays see the walls and the other robots, never itself.
 
 Example::
 
@@ -78,6 +108,7 @@ import math
 from collections.abc import Callable, Sequence
 from enum import IntEnum
 
+import numpy as np
 import pymunk
 
 from .arena import Arena, Point
@@ -222,6 +253,21 @@ class _Chipmunk:
         n = info.normal
         return info.alpha, n.x, n.y
 
+    def shape_query(
+        self, shape: pymunk.Shape, x: float, y: float, ex: float, ey: float, radius: float
+    ) -> tuple[bool, float, float, float]:
+        """``cpShapeSegmentQuery`` of ``shape`` alone from ``(x, y)`` to ``(ex, ey)`` with
+        ``radius``: ``(hit, alpha, nx, ny)``, ``(False, 1.0, 0.0, 0.0)`` if none
+        (pymunk's ``Shape.segment_query``)."""
+        if self.lib is None:  # pragma: no cover - other pymunk layouts
+            hit = shape.segment_query((x, y), (ex, ey), radius)
+            return (False, 1.0, 0.0, 0.0) if hit is None else (True, hit.alpha, *hit.normal)
+        info = self.info
+        if not self.lib.cpShapeSegmentQuery(shape._shape, (x, y), (ex, ey), radius, info):
+            return False, 1.0, 0.0, 0.0
+        n = info.normal
+        return True, info.alpha, n.x, n.y
+
     def position(self, body: pymunk.Body) -> tuple[float, float]:
         if self.lib is None:  # pragma: no cover - other pymunk layouts
             return tuple(body.position)
@@ -245,39 +291,61 @@ def copy_spacing(segments: Sequence[tuple[Point, Point]], radius: float) -> floa
 
 
 class World:
-    """Walls as static segments and ``n_robots`` circle bodies in one pymunk space."""
+    """Walls as static segments and ``n_robots`` circle bodies in one pymunk space: each
+    robot in its own copy of the arena, or all in one (``shared``: see the module doc)."""
 
     def __init__(
-        self, segments: Sequence[tuple[Point, Point]], radius: float, n_robots: int = 1
+        self,
+        segments: Sequence[tuple[Point, Point]],
+        radius: float,
+        n_robots: int = 1,
+        shared: bool = False,
     ) -> None:
         self.radius = float(radius)
         self.segments = [(tuple(map(float, a)), tuple(map(float, b))) for a, b in segments]
+        self.shared = bool(shared)
+        """The robots share one copy of the arena and are bodies to each other."""
+        copies = 1 if self.shared else n_robots
         self.space = pymunk.Space()
         """The thin walls (what the sensors see) and the robots' bodies."""
-        self.spacing = copy_spacing(self.segments, self.radius) if n_robots > 1 else 0.0
-        """x distance between the arena copies of successive robots (0: one robot)."""
-        self.offsets = [k * self.spacing for k in range(n_robots)]
-        self.motion = [pymunk.Space() for _ in range(n_robots)]
+        self.spacing = copy_spacing(self.segments, self.radius) if copies > 1 else 0.0
+        """x distance between the arena copies of successive robots (0: one copy)."""
+        self.offsets = [k * self.spacing for k in range(copies)]
+        self.motion = [pymunk.Space() for _ in range(copies)]
         """Per robot, its copy's walls as segments of its radius and its wall-end discs,
-        in a space of their own: what the robot's moves ask."""
-        added = [self._add_walls(k) for k in range(n_robots)]
-        self._cp = _Chipmunk(self.space, self.motion)
+        in a space of their own: what the robot's moves ask (a shared world's robots
+        all ask the one copy's)."""
+        added = [self._add_walls(k) for k in range(copies)]
         self.copies = [walls for walls, _ in added]
         """Thin wall shapes of each robot's copy of the arena, in :attr:`segments` order."""
         self.ends = [discs for _, discs in added]
         """Discs of the robot's radius at the wall ends of each robot's copy."""
+        if self.shared:  # one copy, every robot's
+            self.offsets = self.offsets * n_robots
+            self.motion = self.motion * n_robots
+            self.copies = self.copies * n_robots
+            self.ends = self.ends * n_robots
+        self._cp = _Chipmunk(self.space, self.motion)
         self.walls = self.copies[0]
         """Wall shapes of robot 0's copy: the arena's own coordinates."""
+        self.present = np.full(n_robots, not self.shared, np.bool_)
+        """Per robot: it is in the arena (a shared world's robots from :meth:`place` to
+        :meth:`park`; an isolated world's always, each in its own copy)."""
+        self.xy = np.zeros((n_robots, 2)) if self.shared else None
+        """A shared world's robots' centres, ``(n_robots, 2)``, as their bodies hold them
+        (a parked robot's where it was parked); None in an isolated world."""
         self.bodies: list[pymunk.Body] = []
         self.shapes: list[pymunk.Circle] = []
-        for _ in range(n_robots):
-            self._add_robot()
+        for i in range(n_robots):
+            self._add_robot(i)
         self.heading = [0.0] * n_robots
 
     @classmethod
-    def from_arena(cls, arena: Arena, radius: float, n_robots: int = 1) -> World:
+    def from_arena(
+        cls, arena: Arena, radius: float, n_robots: int = 1, shared: bool = False
+    ) -> World:
         """A world holding ``arena``'s walls and obstacles (``rotate_deg`` applied)."""
-        return cls(arena.to_world().segments(), radius, n_robots)
+        return cls(arena.to_world().segments(), radius, n_robots, shared)
 
     def _add_walls(self, k: int) -> tuple[list[pymunk.Segment], list[pymunk.Circle]]:
         """Add robot ``k``'s copy of the walls (shifted by its offset along x): thin
@@ -306,15 +374,35 @@ class World:
         motion.add(*thick, *discs)
         return walls, discs
 
-    def _add_robot(self) -> None:
+    def _add_robot(self, i: int) -> None:
         body = pymunk.Body(1.0, math.inf)
         shape = pymunk.Circle(body, self.radius)
         shape.friction = 0.0
         shape.elasticity = 0.0
-        shape.filter = SOLID
+        shape.filter = self._robot_filter(i) if self.shared else SOLID
         self.space.add(body, shape)
         self.bodies.append(body)
         self.shapes.append(shape)
+
+    def _robot_filter(self, i: int) -> pymunk.ShapeFilter:
+        """Robot ``i``'s circle's filter in a shared world: its own group (``i + 1``: its
+        own rays skip it), the robots' category while it is in the arena, none parked."""
+        category = ROBOT_CATEGORY if self.present[i] else 0
+        return pymunk.ShapeFilter(i + 1, category, pymunk.ShapeFilter.ALL_MASKS())
+
+    def sensor_filter(self, i: int = 0) -> pymunk.ShapeFilter:
+        """The filter of robot ``i``'s sensor rays: the walls only in an isolated world
+        (:data:`WALL_ONLY`); in a shared world the walls and the robots in the arena,
+        robot ``i``'s own circle left out (its group)."""
+        if not self.shared:
+            return WALL_ONLY
+        return pymunk.ShapeFilter(group=i + 1, mask=WALL_CATEGORY | ROBOT_CATEGORY)
+
+    @staticmethod
+    def robot_of(shape: pymunk.Shape) -> int:
+        """The index of the robot whose circle ``shape`` is in a shared world, -1 for a
+        wall (a sensor ray's hit: :meth:`sensor_filter` shows nothing else)."""
+        return shape.filter.group - 1
 
     # -- state ----------------------------------------------------------------------
     @property
@@ -338,9 +426,25 @@ class World:
         return (x - self.offsets[i], y, self.heading[i])
 
     def place(self, i: int, at: Point, heading: float) -> None:
-        """Put robot ``i`` at ``at`` (arena coordinates) with ``heading`` (radians)."""
-        self._cp.set_position(self.bodies[i], float(at[0]) + self.offsets[i], float(at[1]))
+        """Put robot ``i`` at ``at`` (arena coordinates) with ``heading`` (radians); in a
+        shared world it is then in the arena (:attr:`present`), wherever it was."""
+        x, y = float(at[0]) + self.offsets[i], float(at[1])
+        self._cp.set_position(self.bodies[i], x, y)
         self.heading[i] = heading % TWO_PI
+        if self.shared:
+            self.xy[i] = x, y
+            if not self.present[i]:
+                self.present[i] = True
+                self.shapes[i].filter = self._robot_filter(i)
+
+    def park(self, i: int) -> None:
+        """Take robot ``i`` of a shared world out of the arena (its episode ended): no
+        obstacle, no sensor target until :meth:`place` puts it back. Its body keeps its
+        position; moving it is an error until then."""
+        if not self.shared:
+            raise ValueError("only a shared world's robots leave the arena")
+        self.present[i] = False
+        self.shapes[i].filter = self._robot_filter(i)
 
     def copy_position(self, i: int) -> tuple[float, float]:
         """Robot ``i``'s centre in its own copy's coordinates, exactly as its body holds it
@@ -351,6 +455,8 @@ class World:
         """Put robot ``i``'s body at ``(x, y)`` in its copy's coordinates (a compiled
         move's end, handed back), the heading unchanged."""
         self._cp.set_position(self.bodies[i], float(x), float(y))
+        if self.shared:
+            self.xy[i] = x, y
 
     # -- actions --------------------------------------------------------------------
     def act(self, actions: Sequence[int], distance: float, arc: float) -> None:
@@ -397,18 +503,24 @@ class World:
 
     def shift(self, i: int, dx: float, dy: float) -> None:
         """Move robot ``i``'s centre by ``(dx, dy)`` inches as a swept circle: stopped by
-        the first wall, sliding along it (:func:`sweep`); the heading is unchanged."""
+        the first wall (or, in a shared world, another robot in the arena), sliding along
+        it (:func:`sweep`); the heading is unchanged."""
+        if self.shared and not self.present[i]:
+            raise ValueError(f"robot {i} is parked: place it before it moves")
         body = self.bodies[i]
         x, y = self._cp.position(body)
         x, y = sweep(x, y, dx, dy, lambda x, y, dx, dy: self.first_contact(i, x, y, dx, dy))
         self._cp.set_position(body, x, y)
+        if self.shared:
+            self.xy[i] = x, y
 
     def first_contact(
         self, i: int, x: float, y: float, dx: float, dy: float
     ) -> tuple[float, float, float]:
-        """The first wall robot ``i`` (centre ``(x, y)`` in its copy's coordinates) meets
-        moving by ``(dx, dy)``: ``(alpha, nx, ny)``, the fraction of the move done and the
-        unit normal from the wall towards the robot; ``(1.0, 0.0, 0.0)`` when none.
+        """The first wall (or other robot) robot ``i`` (centre ``(x, y)`` in its copy's
+        coordinates) meets moving by ``(dx, dy)``: ``(alpha, nx, ny)``, the fraction of the
+        move done and the unit normal from the wall towards the robot; ``(1.0, 0.0, 0.0)``
+        when none.
 
         One ``cpSpaceSegmentQueryFirst`` against the walls and wall-end discs of the
         robot's radius. If it answers ``alpha = 0`` (the move starts touching a wall),
@@ -417,12 +529,26 @@ class World:
         (``dx nx + dy ny >= -ALONG * |d|``) is left out; then each wall-end disc (alpha 0
         there is a touching wall's end, answered by the wall). The smallest alpha wins,
         the first asked on a tie (``cpSpaceSegmentQueryFirst``'s strict ``<``).
+
+        In a shared world each other robot in the arena is asked next, in index order
+        (:meth:`robot_contact`); it wins only with a strictly smaller alpha.
         """
         ex = x + dx
         ey = y + dy
         hit = self._cp.first(i, x, y, ex, ey)
-        if hit[0] != 0.0:
-            return hit
+        if hit[0] == 0.0:
+            hit = self._touching_walls(i, x, y, dx, dy)
+        if self.shared:
+            return self.robot_contact(i, x, y, dx, dy, hit)
+        return hit
+
+    def _touching_walls(
+        self, i: int, x: float, y: float, dx: float, dy: float
+    ) -> tuple[float, float, float]:
+        """:meth:`first_contact` of a move that starts touching a wall: each wall and
+        wall-end disc asked alone."""
+        ex = x + dx
+        ey = y + dy
         length = math.sqrt(dx * dx + dy * dy)
         best, bnx, bny = 1.0, 0.0, 0.0
         for seg in self.copies[i]:
@@ -442,12 +568,71 @@ class World:
                 bnx, bny = info.normal
         return best, bnx, bny
 
+    def robot_contact(
+        self, i: int, x: float, y: float, dx: float, dy: float,
+        best: tuple[float, float, float] = (1.0, 0.0, 0.0),
+    ) -> tuple[float, float, float]:  # fmt: skip
+        """The first other robot of a shared world that robot ``i`` at ``(x, y)`` meets
+        moving by ``(dx, dy)``, if it comes before ``best`` (a contact found already):
+        ``(alpha, nx, ny)`` as :meth:`first_contact`.
+
+        Each robot ``j != i`` in the arena, in index order: ``cpShapeSegmentQuery`` of its
+        circle (radius ``R``) with a query of radius ``R`` (module doc). A robot the move
+        starts touching (alpha 0) that the move does not go into (``dx nx + dy ny >=
+        -ALONG * |d|``) is left out, as a touching wall is; a robot wins with a strictly
+        smaller alpha than the best so far."""
+        ex = x + dx
+        ey = y + dy
+        alpha_best, bnx, bny = best
+        length = math.sqrt(dx * dx + dy * dy)
+        present, shapes, query = self.present, self.shapes, self._cp.shape_query
+        for j in range(len(shapes)):
+            if j == i or not present[j]:
+                continue
+            hit, alpha, nx, ny = query(shapes[j], x, y, ex, ey, self.radius)
+            if not hit:
+                continue
+            if alpha == 0.0 and dx * nx + dy * ny >= -ALONG * length:
+                continue
+            if alpha < alpha_best:
+                alpha_best, bnx, bny = alpha, nx, ny
+        return alpha_best, bnx, bny
+
     # -- geometry queries (for tests and the viewer) ----------------------------------
-    def wall_clearance(self, i: int = 0) -> float:
-        """Distance from robot ``i``'s edge to the nearest wall (negative = overlap)."""
-        p = self.bodies[i].position - (self.offsets[i], 0.0)
+    def wall_clearance(self, i: int = 0, at: Point | None = None) -> float:
+        """Distance from robot ``i``'s edge (at its position, or centred at ``at``, arena
+        coordinates) to the nearest wall (negative = overlap)."""
+        p = self.bodies[i].position - (self.offsets[i], 0.0) if at is None else at
         best = math.inf
         for seg in self.walls:
             info = seg.point_query(p)
             best = min(best, info.distance)
         return best - self.radius
+
+    def robot_clearance(self, i: int = 0, at: Point | None = None) -> float:
+        """Distance from robot ``i``'s edge (at its position, or centred at ``at``) to the
+        nearest other robot's edge in a shared world's arena (negative: they overlap;
+        infinity: no other robot is in the arena, or the world is not shared): where a
+        robot may be placed, and how close two robots came."""
+        if not self.shared:
+            return math.inf
+        x, y = self._cp.position(self.bodies[i]) if at is None else (at[0], at[1])
+        best = math.inf
+        for j in range(len(self.bodies)):
+            if j != i and self.present[j]:
+                best = min(best, math.hypot(x - self.xy[j, 0], y - self.xy[j, 1]))
+        return best - 2.0 * self.radius
+
+    def overlaps(self, i: int = 0, slop: float = COLLISION_SLOP) -> list[int]:
+        """The robots in a shared world's arena that robot ``i`` overlaps by more than
+        ``slop`` inches (centres closer than ``2R - slop``)."""
+        if not self.shared:
+            return []
+        x, y = self._cp.position(self.bodies[i])
+        return [
+            j
+            for j in range(len(self.bodies))
+            if j != i
+            and self.present[j]
+            and math.hypot(x - self.xy[j, 0], y - self.xy[j, 1]) < 2.0 * self.radius - slop
+        ]

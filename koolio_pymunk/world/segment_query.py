@@ -33,6 +33,18 @@ moves of :mod:`koolio_pymunk.world.swept_move`:
 * :func:`first_contact` keeps the smallest alpha over the walls as
   ``cpSpaceSegmentQueryFirst`` does, and applies the world's rule for walls the circle
   starts touching (:meth:`koolio_pymunk.world.physics.World.first_contact`).
+
+**Other robots** (a shared world, :mod:`koolio_pymunk.world.physics`): every robot is a
+pymunk circle of the robots' radius, and a query meets it as Chipmunk's
+``cpShapeSegmentQuery`` of a circle shape does (:func:`circle_shape_query`: the point
+query of the start, then ``CircleSegmentQuery``). The robots are given as an ``(N, 2)``
+array of centres with a flag per robot (in the arena or parked) and the index of the
+robot asking (its own circle left out); nothing is allocated per query:
+
+* :func:`robot_contact` is the moving circle's contact with the other robots, after the
+  walls' (:meth:`World.robot_contact <koolio_pymunk.world.physics.World.robot_contact>`);
+* :func:`first_robot_hit`, :func:`cast_among` and :func:`line_of_sight_among` are the
+  sensors' rays against walls and robots, a hit's robot and normal included.
 """
 
 from __future__ import annotations
@@ -53,7 +65,7 @@ _SPLIT = 134217729.0
 
 
 #: Extra reach (inches) when culling walls by bounding box: far above any rounding.
-_CULL_MARGIN = 1.0
+CULL_MARGIN = _CULL_MARGIN = 1.0
 
 
 #: Chipmunk's ``CPFLOAT_MIN`` (``DBL_MIN``), added to a length before its reciprocal in
@@ -404,3 +416,179 @@ def first_contact(
             bnx = nx
             bny = ny
     return best, bnx, bny
+
+
+# -- other robots (a shared world) ---------------------------------------------------------
+
+
+@numba.njit(cache=True, error_model="numpy")
+def circle_shape_query(
+    cx: float, cy: float, r: float, x: float, y: float, ex: float, ey: float, radius: float
+) -> tuple[bool, float, float, float]:
+    """Chipmunk's ``cpShapeSegmentQuery`` of a circle shape of radius ``r`` at ``(cx,
+    cy)`` (a robot's body) by a query of ``radius`` from ``(x, y)`` to ``(ex, ey)``:
+    ``(hit, alpha, nx, ny)``. First ``cpCircleShapePointQuery`` of the start: within
+    ``radius`` of the circle (``|start - c| - r <= radius``) it answers alpha 0 and the
+    normal from the circle's nearest point towards the start (``cpvnormalize``; the
+    circle's centre itself has none, 0); else :func:`circle_query` (``CircleSegmentQuery``,
+    radii ``r + radius``)."""
+    dx = x - cx
+    dy = y - cy
+    d = math.sqrt(dx * dx + dy * dy)
+    r_over_d = r / d if d > 0.0 else r
+    px = cx + dx * r_over_d
+    py = cy + dy * r_over_d
+    if d - r <= radius:
+        nx, ny = _normalize(x - px, y - py)
+        return True, 0.0, nx, ny
+    return circle_query(cx, cy, r, x, y, ex, ey, radius)
+
+
+@numba.njit(cache=True)
+def robot_contact(
+    x: float, y: float, dx: float, dy: float, radius: float, robots: np.ndarray,
+    present: np.ndarray, me: int, box: tuple, best: float, bnx: float, bny: float,
+) -> tuple[float, float, float]:  # fmt: skip
+    """:func:`first_contact` continued over the other robots: the first robot ``j != me``
+    with ``present[j]`` whose circle (radius ``radius``, centre ``robots[j]``) a circle of
+    ``radius`` at ``(x, y)`` meets moving by ``(dx, dy)``, if it comes strictly before
+    ``best`` (the walls' contact): ``(alpha, nx, ny)``.
+
+    Each robot in index order is :func:`circle_shape_query` with the mover's radius (the
+    other robot is a disc of twice the radius for the mover's centre); a robot the move
+    starts touching (alpha 0) that the move does not go into (``dx nx + dy ny >= -ALONG
+    * |d|``) is left out. Robots whose centre lies outside ``box`` = ``(x0, y0, x1, y1)``
+    are skipped: the caller's box holds every centre the move can meet.
+    :meth:`koolio_pymunk.world.physics.World.robot_contact` is the reference.
+    """
+    ex = x + dx
+    ey = y + dy
+    length = math.sqrt(dx * dx + dy * dy)
+    x0, y0, x1, y1 = box
+    for j in range(robots.shape[0]):
+        if j == me or not present[j]:
+            continue
+        cx = robots[j, 0]
+        cy = robots[j, 1]
+        if cx < x0 or cx > x1 or cy < y0 or cy > y1:
+            continue
+        hit, alpha, nx, ny = circle_shape_query(cx, cy, radius, x, y, ex, ey, radius)
+        if not hit:
+            continue
+        if alpha == 0.0 and dx * nx + dy * ny >= -ALONG * length:
+            continue
+        if alpha < best:
+            best = alpha
+            bnx = nx
+            bny = ny
+    return best, bnx, bny
+
+
+@numba.njit(cache=True)
+def robots_near(
+    x: float, y: float, reach: float, robots: np.ndarray, present: np.ndarray, me: int,
+    near: np.ndarray,
+) -> int:  # fmt: skip
+    """Fill ``near`` with the robots ``j != me`` in the arena whose centre lies within
+    ``reach`` (plus the cull margin) of ``(x, y)`` in x and in y, in index order; returns
+    how many. A ray of length ``L`` from ``(x, y)`` meets no robot beyond ``L + R``."""
+    n = 0
+    grow = reach + _CULL_MARGIN
+    for j in range(robots.shape[0]):
+        if j == me or not present[j]:
+            continue
+        if abs(robots[j, 0] - x) > grow or abs(robots[j, 1] - y) > grow:
+            continue
+        near[n] = j
+        n += 1
+    return n
+
+
+@numba.njit(cache=True, inline="always")
+def off_the_line(vx: float, vy: float, dx: float, dy: float, radius: float) -> bool:
+    """A circle of ``radius`` centred ``(vx, vy)`` from a segment's start, the segment
+    going ``(dx, dy)``: its centre lies farther than ``radius`` plus the cull margin from
+    the segment's line, or that far behind its start, so no query along the segment can
+    meet it (``|d|`` is bounded by ``|dx| + |dy|``, so no square root)."""
+    reach = (radius + _CULL_MARGIN) * (abs(dx) + abs(dy))
+    return abs(vx * dy - vy * dx) > reach or vx * dx + vy * dy < -reach
+
+
+@numba.njit(cache=True)
+def first_robot_hit(
+    x: float, y: float, ex: float, ey: float, radius: float, robots: np.ndarray,
+    near: np.ndarray, n: int, best: float,
+) -> tuple[float, int, float, float]:  # fmt: skip
+    """The ray from ``(x, y)`` to ``(ex, ey)`` against the circles (``radius``) of robots
+    ``near[:n]``, after the walls' hit fraction ``best``: ``(alpha, robot, nx, ny)`` of the
+    first robot met strictly before ``best`` (``(best, -1, 0.0, 0.0)``: none). Chipmunk's
+    radius-0 ``cpShapeSegmentQuery`` of each robot's circle, in index order, as
+    ``cpSpaceSegmentQueryFirst`` asks the robots' bodies after the static walls; a robot
+    far off the ray's line (:func:`off_the_line`) is not asked."""
+    who = -1
+    bnx = 0.0
+    bny = 0.0
+    dx = ex - x
+    dy = ey - y
+    for q in range(n):
+        j = near[q]
+        cx = robots[j, 0]
+        cy = robots[j, 1]
+        if off_the_line(cx - x, cy - y, dx, dy, radius):
+            continue
+        hit, alpha, nx, ny = circle_shape_query(cx, cy, radius, x, y, ex, ey, 0.0)
+        if hit and alpha < best:
+            best = alpha
+            who = j
+            bnx = nx
+            bny = ny
+    return best, who, bnx, bny
+
+
+@numba.njit(cache=True)
+def cast_among(
+    x: float, y: float, dirs: np.ndarray, length: float, walls: np.ndarray,
+    robots: np.ndarray, present: np.ndarray, me: int, radius: float,
+) -> np.ndarray:  # fmt: skip
+    """:func:`cast` in a shared world: the centre distance of the first wall or other
+    robot (``robots``, ``present``, ``me``: module doc) along each ray."""
+    active = np.empty(walls.shape[0], np.int64)
+    n = near_walls(x, y, length, walls, active)
+    near = np.empty(robots.shape[0], np.int64)
+    n_r = robots_near(x, y, length + radius, robots, present, me, near)
+    cs = dirs[0].ravel()
+    sn = dirs[1].ravel()
+    out = np.empty(cs.size)
+    for i in range(cs.size):
+        ex = x + length * cs[i]
+        ey = y + length * sn[i]
+        alpha = first_alpha(x, y, ex - x, ey - y, walls, active, n)
+        out[i] = first_robot_hit(x, y, ex, ey, radius, robots, near, n_r, alpha)[0] * length
+    return out.reshape(dirs[0].shape)
+
+
+@numba.njit(cache=True)
+def line_of_sight_among(
+    x: float, y: float, tx: float, ty: float, walls: np.ndarray, robots: np.ndarray,
+    present: np.ndarray, me: int, radius: float,
+) -> bool:  # fmt: skip
+    """:func:`line_of_sight` in a shared world: no wall and no other robot in the arena
+    (a circle of ``radius``) between ``(x, y)`` and ``(tx, ty)`` (the reference's
+    tolerance)."""
+    dist = hypot(tx - x, ty - y)
+    if dist < 1e-9:
+        return True
+    active = np.empty(walls.shape[0], np.int64)
+    n = all_walls(walls, active)
+    alpha = first_alpha(x, y, tx - x, ty - y, walls, active, n)
+    for j in range(robots.shape[0]):
+        if j == me or not present[j]:
+            continue
+        cx = robots[j, 0]
+        cy = robots[j, 1]
+        if off_the_line(cx - x, cy - y, tx - x, ty - y, radius):
+            continue
+        hit, a, _, _ = circle_shape_query(cx, cy, radius, x, y, tx, ty, 0.0)
+        if hit and a < alpha:
+            alpha = a
+    return alpha >= 1.0 or alpha * dist >= dist - 1e-7

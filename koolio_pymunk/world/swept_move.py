@@ -26,6 +26,18 @@ five actions, with a real drive's errors when they are on, as
 pymunk's answers: the same end position, bit for bit, over random moves in every shipped
 arena and in generated ones.
 
+**A shared world** (robots that are bodies to each other): :func:`sweep_among`,
+:func:`move_among` and :func:`act_among` are the same moves against the walls *and* the
+other robots in the arena, :meth:`World.shift
+<koolio_pymunk.world.physics.World.shift>` of a shared world bit for bit. The robots come
+as ``robots`` (``(N, 2)`` float64: every robot's centre, the mover's own row included and
+ignored), ``present`` (``(N,)`` bool: in the arena; a parked robot is no obstacle) and
+``me`` (the mover's index); nothing is allocated for them, and a robot is asked only
+when its centre lies within the move's reach plus twice the radius of the start
+(:func:`~koolio_pymunk.world.segment_query.robot_contact`). The push-out, the slide and
+the corner rule are :func:`sweep`'s own code (:func:`_slide`). A rescue's Reverse is
+``move_among(..., -distance, ...)``.
+
 Example::
 
     >>> from koolio_pymunk.world.physics import World
@@ -50,7 +62,7 @@ import numpy as np
 
 from ..store.kernel_cache import ensure_fresh
 from .physics import ALONG, MAX_QUERIES, MIN_SLIDE, SKIN, TWO_PI
-from .segment_query import _CULL_MARGIN, first_contact
+from .segment_query import _CULL_MARGIN, first_contact, robot_contact
 
 ensure_fresh()  # numba's cache, in step with every kernel's source (see there)
 
@@ -76,6 +88,32 @@ def _walls_near(x: float, y: float, reach: float, walls: np.ndarray, active: np.
     return n
 
 
+@numba.njit(cache=True, inline="always")
+def _slide(
+    x: float, y: float, dx: float, dy: float, alpha: float, nx: float, ny: float, k: int,
+    pnx: float, pny: float,
+) -> tuple[float, float, float, float, bool]:  # fmt: skip
+    """One contact of a sweep: the robot goes ``alpha`` of the move and :data:`SKIN`
+    along the normal ``n``; the rest, its normal part removed, is the next move. Returns
+    ``(x, y, rest x, rest y, go on)``: a slide shorter than :data:`MIN_SLIDE` or (after
+    the first query, ``k > 0``) back into the contact met before (normal ``pn``) ends the
+    move."""
+    x = x + alpha * dx + SKIN * nx
+    y = y + alpha * dy + SKIN * ny
+    rest = 1.0 - alpha
+    rx = rest * dx
+    ry = rest * dy
+    dn = rx * nx + ry * ny
+    rx = rx - dn * nx
+    ry = ry - dn * ny
+    slide = math.sqrt(rx * rx + ry * ry)
+    if slide < MIN_SLIDE:
+        return x, y, rx, ry, False
+    if k > 0 and rx * pnx + ry * pny < -ALONG * slide:
+        return x, y, rx, ry, False
+    return x, y, rx, ry, True
+
+
 @numba.njit(cache=True)
 def sweep(
     walls: np.ndarray, x: float, y: float, dx: float, dy: float, radius: float
@@ -94,21 +132,40 @@ def sweep(
         alpha, nx, ny = first_contact(x, y, dx, dy, radius, walls, active, n)
         if alpha >= 1.0:
             return x + dx, y + dy
-        x = x + alpha * dx + SKIN * nx
-        y = y + alpha * dy + SKIN * ny
-        rest = 1.0 - alpha
-        rx = rest * dx
-        ry = rest * dy
-        dn = rx * nx + ry * ny
-        rx = rx - dn * nx
-        ry = ry - dn * ny
-        slide = math.sqrt(rx * rx + ry * ry)
-        if slide < MIN_SLIDE:
+        x, y, dx, dy, more = _slide(x, y, dx, dy, alpha, nx, ny, k, pnx, pny)
+        if not more:
             break
-        if k > 0 and rx * pnx + ry * pny < -ALONG * slide:
+        pnx = nx
+        pny = ny
+    return x, y
+
+
+@numba.njit(cache=True)
+def sweep_among(
+    walls: np.ndarray, robots: np.ndarray, present: np.ndarray, me: int, x: float, y: float,
+    dx: float, dy: float, radius: float,
+) -> tuple[float, float]:  # fmt: skip
+    """:func:`sweep` of robot ``me`` in a shared world: stopped by the first wall or
+    other robot in the arena (``robots``, ``present``: the module doc), sliding along it.
+    A shared :class:`~koolio_pymunk.world.physics.World`'s :meth:`shift`, bit for bit."""
+    active = np.empty(walls.shape[0], np.int64)
+    reach = abs(dx) + abs(dy) + radius
+    n = _walls_near(x, y, reach, walls, active)
+    grow = reach + radius + _CULL_MARGIN  # a robot met is 2R from a point of the move
+    box = (x - grow, y - grow, x + grow, y + grow)
+    pnx = 0.0
+    pny = 0.0
+    for k in range(MAX_QUERIES):
+        if dx == 0.0 and dy == 0.0:
             break
-        dx = rx
-        dy = ry
+        alpha, nx, ny = first_contact(x, y, dx, dy, radius, walls, active, n)
+        alpha, nx, ny = robot_contact(x, y, dx, dy, radius, robots, present, me, box, alpha,
+                                      nx, ny)  # fmt: skip
+        if alpha >= 1.0:
+            return x + dx, y + dy
+        x, y, dx, dy, more = _slide(x, y, dx, dy, alpha, nx, ny, k, pnx, pny)
+        if not more:
+            break
         pnx = nx
         pny = ny
     return x, y
@@ -125,34 +182,42 @@ def move(
     return sweep(walls, x, y, distance * math.cos(heading), distance * math.sin(heading), radius)
 
 
+@numba.njit(cache=True)
+def move_among(
+    walls: np.ndarray, robots: np.ndarray, present: np.ndarray, me: int, x: float, y: float,
+    heading: float, distance: float, radius: float,
+) -> tuple[float, float]:  # fmt: skip
+    """:func:`move` of robot ``me`` in a shared world (:func:`sweep_among`); with a
+    negative ``distance``, a rescue's Reverse."""
+    dx = distance * math.cos(heading)
+    dy = distance * math.sin(heading)
+    return sweep_among(walls, robots, present, me, x, y, dx, dy, radius)
+
+
 #: :func:`act`'s ``motion`` when the drive has no errors: ``(on, drift, drift sigma, slip
 #: sigma, turn sigma)``.
 NO_MOTION_ERRORS = (0.0, 0.0, 0.0, 0.0, 0.0)
 
 
-@numba.njit(cache=True)
-def act(action: int, x: float, y: float, h: float, rng, world: tuple, motion) -> tuple:
-    """The pose after ``action`` (0 Stop, 1 RotateLeft, 2 RotateRight, 3 Forward, 4
-    Reverse): :meth:`World.act`, or with a real drive's errors (``motion[0]`` on; the
-    draws from ``rng``) ``KoolioEnv._act_with_errors`` (:class:`MotionErrors`' turn and
-    move, :meth:`World.drive`'s chord). ``world`` = ``(walls, radius, move distance, turn
-    arc)``; ``motion`` = ``(on, drift, drift sigma, slip sigma, turn sigma)``."""
-    walls, radius, distance, arc = world[0], world[1], world[2], world[3]
+@numba.njit(cache=True, inline="always")
+def _drive(action: int, h: float, rng, distance: float, arc: float, motion) -> tuple:
+    """What ``action`` does from heading ``h`` (:func:`act`'s doc): ``(moves, dx, dy,
+    heading after)``, the displacement to sweep when ``moves``; a real drive's draws
+    (``motion[0]`` on) from ``rng``."""
     on, drift, drift_sigma, slip_sigma, turn_sigma = (motion[0], motion[1], motion[2],
                                                       motion[3], motion[4])  # fmt: skip
     if action == 0:
-        return x, y, h
+        return False, 0.0, 0.0, h
     if on == 0.0:
         if action == 1:
-            return x, y, (h + arc) % TWO_PI
+            return False, 0.0, 0.0, (h + arc) % TWO_PI
         if action == 2:
-            return x, y, (h - arc) % TWO_PI
+            return False, 0.0, 0.0, (h - arc) % TWO_PI
         d = distance if action == 3 else -distance
-        x, y = sweep(walls, x, y, d * math.cos(h), d * math.sin(h), radius)
-        return x, y, h
+        return True, d * math.cos(h), d * math.sin(h), h
     if action == 1 or action == 2:
         turn = arc + turn_sigma * rng.standard_normal() if turn_sigma > 0.0 else arc
-        return x, y, (h + (turn if action == 1 else -turn)) % TWO_PI
+        return False, 0.0, 0.0, (h + (turn if action == 1 else -turn)) % TWO_PI
     sign = 1.0 if action == 3 else -1.0
     turn = sign * drift
     if drift_sigma > 0.0 or slip_sigma > 0.0:
@@ -165,5 +230,34 @@ def act(action: int, x: float, y: float, h: float, rng, world: tuple, motion) ->
         half = 0.5 * turn
         chord = d if half == 0.0 else d * (math.sin(half) / half)
         mid = h + half
-        x, y = sweep(walls, x, y, chord * math.cos(mid), chord * math.sin(mid), radius)
-    return x, y, (h + turn) % TWO_PI
+        return True, chord * math.cos(mid), chord * math.sin(mid), (h + turn) % TWO_PI
+    return False, 0.0, 0.0, (h + turn) % TWO_PI
+
+
+@numba.njit(cache=True)
+def act(action: int, x: float, y: float, h: float, rng, world: tuple, motion) -> tuple:
+    """The pose after ``action`` (0 Stop, 1 RotateLeft, 2 RotateRight, 3 Forward, 4
+    Reverse): :meth:`World.act`, or with a real drive's errors (``motion[0]`` on; the
+    draws from ``rng``) ``KoolioEnv._act_with_errors`` (:class:`MotionErrors`' turn and
+    move, :meth:`World.drive`'s chord). ``world`` = ``(walls, radius, move distance, turn
+    arc)``; ``motion`` = ``(on, drift, drift sigma, slip sigma, turn sigma)``."""
+    walls, radius, distance, arc = world[0], world[1], world[2], world[3]
+    moves, dx, dy, h = _drive(action, h, rng, distance, arc, motion)
+    if moves:
+        x, y = sweep(walls, x, y, dx, dy, radius)
+    return x, y, h
+
+
+@numba.njit(cache=True)
+def act_among(
+    action: int, x: float, y: float, h: float, rng, world: tuple, motion, robots: np.ndarray,
+    present: np.ndarray, me: int,
+) -> tuple:  # fmt: skip
+    """:func:`act` of robot ``me`` in a shared world: the same draws and heading, the move
+    :func:`sweep_among` the other robots in the arena (``robots``, ``present``: the module
+    doc). The caller writes the new centre into ``robots[me]``."""
+    walls, radius, distance, arc = world[0], world[1], world[2], world[3]
+    moves, dx, dy, h = _drive(action, h, rng, distance, arc, motion)
+    if moves:
+        x, y = sweep_among(walls, robots, present, me, x, y, dx, dy, radius)
+    return x, y, h
