@@ -136,7 +136,7 @@ def readout(raw: np.ndarray, draws: np.ndarray, encoding: tuple, out: np.ndarray
 
 
 #: :func:`readout` compiled into its callers (:func:`~.inline_twins.inline_twin`): for
-#: compiled callers on a hot path (:func:`readout_batch`, the compiled episode's reading,
+#: compiled callers on a hot path (:func:`readout_batch`, the step engine's reading,
 #: the realism kernel).
 readout_inline = inline_twin(readout)
 

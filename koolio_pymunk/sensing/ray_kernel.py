@@ -321,7 +321,7 @@ def _sense_sub_arcs(
 
 #: :func:`camera_reading` and :func:`sense_one` with every call that passes arrays compiled
 #: into them (:func:`~.inline_twins.inline_twin`): for compiled callers on a hot path (this
-#: module's :func:`sense_batch`, the compiled episode's reading, the realism kernel).
+#: module's :func:`sense_batch`, the step engine's reading, the realism kernel).
 camera_reading_inline = inline_twin(camera_reading, line_of_sight=inline_twin(line_of_sight))
 sense_one_inline = inline_twin(
     sense_one, near_walls=inline_twin(near_walls), camera_reading=camera_reading_inline

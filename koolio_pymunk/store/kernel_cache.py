@@ -2,7 +2,7 @@
 
 numba stores a compiled ``cache=True`` function in the ``__pycache__`` folder beside its
 module and reuses it while that module's file keeps its time stamp and size. It does not
-look at the functions the kernel inlines or calls from other files: the episode kernel
+look at the functions the kernel inlines or calls from other files: the step engine
 compiles the ray, encoding and realism kernels into itself (``sensing/inline_twins.py``),
 so after a change to ``realism_kernel.py`` alone (a ``git pull``, an edit) it would load
 its old machine code and compute the old readings.

@@ -429,8 +429,8 @@ class KoolioEnv(gym.Env):
         rescued: tuple[bool, bool],
     ) -> None:
         """Take the state reached by steps run outside :meth:`simulate` with this env's
-        generator, sensors and world (the compiled episode,
-        :mod:`koolio_pymunk.learning.episode_kernel`): the robot's pose, the state key,
+        generator, sensors and world (the step engine,
+        :mod:`koolio_pymunk.learning.engine`): the robot's pose, the state key,
         ``(steps, bumps, episode_reward)`` and ``(has_been_rescued, rescued)``. The
         last reading is then read from the sensor kernel's buffers."""
         self.world.place(0, pose[:2], pose[2])

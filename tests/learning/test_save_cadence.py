@@ -22,8 +22,9 @@ from koolio_pymunk.store.episode_log import log_rows
 from koolio_pymunk.task.env import KoolioEnv
 
 CONFIG = "episode: {max_steps: 40}\n"
-#: The pymunk reference sensors: the Python episode loop (a compiled episode of 40 steps
-#: ends before a signal is looked at), so a signal lands inside an episode.
+#: The pymunk reference sensors: the Python episode loop (on the step engine a 40-step
+#: episode runs inside one compiled call, before a signal is looked at), so a signal lands
+#: inside an episode.
 PYTHON_LOOP = CONFIG + "sensors: {backend: pymunk}\n"
 
 
