@@ -431,7 +431,7 @@ def _plant(folder: Path, name: str, kind: str) -> None:
         sock.close()
 
 
-PLACES = ["q.qtable.lock", "q.csv.lock", "q.qtable", "q.qtable.bak", "q.csv", "tiny.yaml"]
+PLACES = ["q.qtable.lock", "q.best.qtable", "q.qtable", "q.qtable.bak", "q.csv", "tiny.yaml"]
 KINDS = [
     "fifo",
     "folder",

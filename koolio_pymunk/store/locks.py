@@ -3,11 +3,21 @@
 Two ``koolio-pm train`` runs on the same ``--qtable`` would each load the table, learn,
 and overwrite each other's saves: one run's episodes would silently vanish. So a writer
 (``train``, ``view`` while learning, ``sweep``) first takes an advisory lock on a lock
-file beside what it writes (``runs/hallway.qtable.lock``, ``runs/hallway.csv.lock``,
-``sweeps/NAME/.sweep.lock``); a second writer gets the one-line error
+file beside what it writes (``runs/hallway.qtable.lock``, ``sweeps/NAME/.sweep.lock``); a
+second writer gets the one-line error
 ``runs/hallway.qtable: in use by process 4242 (koolio-pm train) ...``. Readers (``eval``,
 ``export``, ``view --greedy``, ``info``) take no lock: every write is atomic, so they
 always read a whole file.
+
+**One lock file per run.** The files of a run are named after its table ``X.qtable``: its
+log ``X.csv``, the checks' ``X.evals.csv`` and the best table ``X.best.qtable``. They share
+the table's lock file, ``X.qtable.lock`` (:func:`lock_path`), so a run leaves one lock
+file, not four, and a second run is still refused whichever of them it names: a log
+``X.csv`` of another table ``Y.qtable`` (``--log`` given) takes ``Y.qtable.lock`` and
+``X.qtable.lock``, and is refused while the run of ``X.qtable`` goes on. A run's file
+whose table's lock this process already holds is covered by it (the lock is counted and
+the operating system's lock given back at the last release); a second lock of the table
+itself is refused within one process as between two.
 
 The lock is the operating system's (``flock`` on POSIX, ``msvcrt.locking`` on Windows),
 held by an open file: it goes away with the process however it ends, SIGKILL included,
@@ -74,15 +84,60 @@ else:
 _NOTE_AT = 1
 
 
+#: A run's files and the table whose lock file they share (module doc), longest first.
+RUN_FILES = ((".best.qtable", ".qtable"), (".evals.csv", ".qtable"), (".csv", ".qtable"))
+
+
 def lock_path(target: str | Path) -> Path:
-    """The lock file of ``target``: ``<target>.lock`` beside it (beside the file a symbolic
-    link points to, so that two names of one file share one lock; beside the link itself
-    when it points nowhere: no folder is made where a dangling link points)."""
+    """The lock file of ``target``: ``<table>.lock`` beside it, where ``<table>`` is the
+    target itself, or for a run's file (:data:`RUN_FILES`) the table it is named after
+    (module doc); beside the file a symbolic link points to, so that two names of one
+    file share one lock (beside the link itself when it points nowhere: no folder is made
+    where a dangling link points).
+
+    >>> [lock_path(n).name for n in ("r.qtable", "r.csv", "r.evals.csv", "r.best.qtable", "p.json")]
+    ['r.qtable.lock', 'r.qtable.lock', 'r.qtable.lock', 'r.qtable.lock', 'p.json.lock']
+    """
     target = Path(target)
     with contextlib.suppress(OSError):  # unreachable: acquire() says why
         if target.is_symlink() and target.exists():
             target = Path(os.path.realpath(target))
-    return target.with_name(target.name + ".lock")
+    name = target.name
+    for suffix, table in RUN_FILES:
+        if name.endswith(suffix) and len(name) > len(suffix):
+            name = name[: -len(suffix)] + table
+            break
+    return target.with_name(name + ".lock")
+
+
+#: The lock files this process holds: their absolute path -> ``[fd, times taken, pid, the
+#: table itself among them]`` (the pid: a forked child holds nothing of its parent's).
+_HELD: dict[str, list[int]] = {}
+
+
+def _held(path: Path) -> list[int] | None:
+    """This process's hold on the lock file ``path`` (None: it holds none)."""
+    held = _HELD.get(os.path.abspath(path))
+    return held if held is not None and held[2] == os.getpid() else None
+
+
+def _shares(target: Path, path: Path) -> list[int] | None:
+    """This process's hold on ``path`` when ``target`` may share it (module doc): a run's
+    file always, the table only when its run's files alone hold it so far."""
+    held = _held(path)
+    if held is None or (not is_run_file(target) and held[3]):
+        return None
+    return held
+
+
+def is_run_file(target: str | Path) -> bool:
+    """``target`` is a run's file named after its table (:data:`RUN_FILES`).
+
+    >>> is_run_file("r.csv"), is_run_file("r.best.qtable"), is_run_file("r.qtable")
+    (True, True, False)
+    """
+    name = Path(target).name
+    return any(name.endswith(suffix) and len(name) > len(suffix) for suffix, _ in RUN_FILES)
 
 
 #: How a holder's note starts (``#process <pid> (<purpose>)``).
@@ -123,6 +178,12 @@ class FileLock:
         :class:`FileError` when the lock file cannot be made or is not a plain lock file."""
         if self._fd is not None:
             return self
+        held = _shares(self.target, self.path)
+        if held is not None:  # one run's files: the table's lock, already ours
+            held[1] += 1
+            held[3] = held[3] or not is_run_file(self.target)
+            self._fd = held[0]
+            return self
         make_parent(self.path)
         fd = self._open()
         try:
@@ -141,6 +202,7 @@ class FileLock:
             os.close(fd)
             raise
         self._fd = fd
+        _HELD[os.path.abspath(self.path)] = [fd, 1, os.getpid(), not is_run_file(self.target)]
         _write_note(fd, f"process {os.getpid()} ({self.purpose})")
         return self
 
@@ -176,6 +238,13 @@ class FileLock:
         fd, self._fd = self._fd, None
         if fd is None:
             return
+        held = _held(self.path)
+        if held is not None and held[0] == fd:
+            held[1] -= 1
+            held[3] = held[3] and is_run_file(self.target)
+            if held[1] > 0:
+                return
+            del _HELD[os.path.abspath(self.path)]
         with contextlib.suppress(OSError):
             _unlock(fd)
         with contextlib.suppress(OSError):
@@ -249,6 +318,8 @@ def check_lock_file(target: str | Path, path: Path | None = None) -> None:
     say it later); a missing or unreachable one is left to :meth:`FileLock.acquire`."""
     target = Path(target)
     path = path if path is not None else lock_path(target)
+    if _shares(target, path) is not None:
+        return  # the run's lock, this process's: checked when it was taken
     if os.path.islink(path):
         raise _refuse(target, path, _LINK)
     flags = os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0)

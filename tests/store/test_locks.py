@@ -49,16 +49,16 @@ def _fifo(work: Path) -> None:
 
 
 def _dangling_link(work: Path) -> None:
-    (work / "q.csv.lock").symlink_to("elsewhere.txt")
+    (work / "q.qtable.lock").symlink_to("elsewhere.txt")
 
 
 def _folder(work: Path) -> None:
-    (work / "q.csv.lock").mkdir()
+    (work / "q.qtable.lock").mkdir()
 
 
 def _socket(work: Path) -> None:
     with socket.socket(socket.AF_UNIX) as sock:
-        sock.bind("q.csv.lock")  # relative: the current folder is ``work``
+        sock.bind("q.qtable.lock")  # relative: the current folder is ``work``
 
 
 @pytest.mark.parametrize(
@@ -68,9 +68,9 @@ def _socket(work: Path) -> None:
         (_hard_link_of_table, "its lock file q.qtable.lock has 2 names (a hard link"),
         (_other_data, "its lock file q.qtable.lock holds other data than a lock note"),
         (_fifo, "its lock file q.qtable.lock is a FIFO (named pipe), not a lock file"),
-        (_dangling_link, "q.csv: its lock file q.csv.lock is a symbolic link"),
-        (_folder, "q.csv: its lock file q.csv.lock is a folder, not a lock file"),
-        (_socket, "q.csv: its lock file q.csv.lock is a socket, not a lock file"),
+        (_dangling_link, "its lock file q.qtable.lock is a symbolic link"),
+        (_folder, "its lock file q.qtable.lock is a folder, not a lock file"),
+        (_socket, "its lock file q.qtable.lock is a socket, not a lock file"),
     ],
 )
 def test_only_a_plain_lock_file_is_used(work, capsys, make, words):
@@ -151,3 +151,49 @@ def test_dangling_links_make_no_folders_and_one_file_is_not_two(work, capsys):
     from koolio_pymunk.store.locks import lock_path
 
     assert lock_path(work / "t.qtable") == work / "t.qtable.lock"
+
+
+def test_a_run_leaves_one_lock_file(work, capsys):
+    """The log, the checks' file and the best table share the table's lock file."""
+    from koolio_pymunk.apps import cli
+
+    argv = [*TRAIN, "--episodes", "4", "--eval-every", "2", "--eval-episodes", "1"]
+    assert cli.main([*argv, "--qtable", "r.qtable", "--log", "r.csv"]) == 0
+    assert (work / "r.evals.csv").exists() and (work / "r.best.qtable").exists()
+    assert sorted(p.name for p in work.glob("r.*lock*")) == ["r.qtable.lock"]
+
+
+@pytest.fixture
+def other_run(work):
+    """Another process holding ``q.qtable``'s lock (a run of that table) until the end."""
+    import subprocess
+
+    code = (
+        "import sys, time\n"
+        "from koolio_pymunk.store.locks import FileLock\n"
+        "held = FileLock('q.qtable', 'koolio-pm train').acquire()\n"
+        "print('held', flush=True)\n"
+        "sys.stdin.read()\n"
+    )
+    proc = subprocess.Popen([sys.executable, "-c", code], cwd=work, stdin=subprocess.PIPE,
+                            stdout=subprocess.PIPE, text=True)  # fmt: skip
+    assert proc.stdout.readline().strip() == "held"
+    yield proc.pid
+    proc.stdin.close()
+    proc.wait(timeout=30)
+
+
+@pytest.mark.parametrize(
+    "files",
+    [
+        ["--qtable", "y.qtable", "--log", "q.csv"],  # another table, this run's log
+        ["--qtable", "q.best.qtable", "--log", "y.csv"],  # this run's best table
+    ],
+)
+def test_a_run_s_files_are_refused_to_another_run(work, capsys, other_run, files):
+    before = snapshot(work)
+    expect_error(capsys, work, [*TRAIN, *files], f"in use by process {other_run}")
+    after = snapshot(work)
+    made = set(after) - set(before)
+    assert {k: after[k] for k in before} == before  # nothing of the other run touched
+    assert made <= {"y.qtable.lock"}  # at most the refused run's own lock file
