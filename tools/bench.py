@@ -1443,7 +1443,9 @@ def main(argv: list[str] | None = None) -> int:
     names = args.only or [s for s in SECTIONS if s != "baseline" or args.baseline]
     if "baseline" in names and not args.baseline:
         p.error("section baseline needs --baseline DIR")
-    with tempfile.TemporaryDirectory(dir=ROOT) as tmp:
+    scratch = ROOT / "scratch"  # the checkout's disk (saves are fsynced), ignored by git
+    scratch.mkdir(exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=scratch, prefix="bench-") as tmp:
         b = Bench(args, Path(tmp))
         m = b.report["machine"]
         print(
