@@ -752,7 +752,9 @@ def cmd_eval(args: argparse.Namespace) -> int:
     env = _make_env(args)
     table = read_table(args.qtable)
     policy = is_policy_file(args.qtable)
-    run_identity.check(table, env, "score", args.qtable)
+    # --goal all scores every door: it asks what a random-goal run asks of the table
+    asks = _make_env(argparse.Namespace(**{**vars(args), "goal": "random"})) if goal_all else env
+    run_identity.check(table, asks, "score", args.qtable)
     goals = env.arena.goal_names() if goal_all else [None]
     announce_compile(env)
     epsilon = eps or 0.0

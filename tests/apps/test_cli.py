@@ -114,6 +114,22 @@ def test_eval_goal_all_prints_every_door(tmp_path, capsys) -> None:
     assert " all " in out
 
 
+@pytest.mark.parametrize(("trained_for", "warned"), [("random", False), ("311", True)])
+def test_eval_goal_all_warns_only_for_a_table_of_one_goal(tmp_path, capsys, trained_for, warned):
+    """``eval --goal all`` asks what a random-goal run asks: a table trained for a random
+    goal is scored without a warning, a table of one door with one."""
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("episode: {max_steps: 20}\n")
+    q, log = str(tmp_path / "q.qtable"), str(tmp_path / "l.csv")
+    train = ["train", "--episodes", "1", "--qtable", q, "--log", log, "--config", str(cfg)]
+    assert main([*train, "--goal", trained_for, "--quiet"]) == 0
+    capsys.readouterr()
+    score = ["eval", "--qtable", q, "--episodes", "1", "--goal", "all", "--config", str(cfg)]
+    assert main(score) == 0
+    err = capsys.readouterr().err
+    assert ("scored here for" in err) == warned, err
+
+
 def test_check_arena_ok_and_bad(tmp_path) -> None:
     p = cli("check-arena", "hallway")
     assert p.returncode == 0 and "ok" in p.stdout and "1728 x 184 in" in p.stdout
