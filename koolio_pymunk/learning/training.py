@@ -88,16 +88,14 @@ class Progress:
         self.ends.append(self.clock())
 
     def eta_seconds(self, remaining: int) -> float | None:
-        """Seconds ``remaining`` more episodes take at the recent rate (None: no episode
-        has ended yet, so there is no rate)."""
+        """Seconds ``remaining`` more episodes take at the recent rate, measured between
+        episode ends (None before two have ended: the first episode's time holds the
+        start, which on a first run is the kernels' compile, and would promise hours)."""
         if remaining <= 0:
             return 0.0
-        if not self.ends:
+        if len(self.ends) < 2:
             return None
-        if len(self.ends) >= 2:
-            span, n = self.ends[-1] - self.ends[0], len(self.ends) - 1
-        else:
-            span, n = self.ends[0] - self.started, 1
+        span, n = self.ends[-1] - self.ends[0], len(self.ends) - 1
         return remaining * max(0.0, span) / n
 
     @property

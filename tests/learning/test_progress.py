@@ -29,7 +29,14 @@ def test_the_eta_is_the_episodes_left_at_the_recent_rate() -> None:
     assert p.eta_seconds(6) == 12.0
     assert p.line(4, 10, 0.1).endswith("  epsilon 0.100  eta 0:12")
     assert p.line(10, 10, 0.1).endswith("  eta 0:00")  # nothing left
-    assert progress_at([3.0]).eta_seconds(4) == 12.0  # one episode: from the start
+
+
+def test_no_eta_from_the_first_episode_alone() -> None:
+    """The first episode's time holds the start (a first run's 20 s compile): one episode
+    gives no rate; two give the rate between their ends, the start left out."""
+    assert progress_at([30.0]).eta_seconds(4) is None
+    assert progress_at([30.0]).line(1, 5, 0.1).endswith("  eta -:--")
+    assert progress_at([30.0, 30.5]).eta_seconds(4) == 2.0
 
 
 def test_the_rate_is_the_recent_episodes_not_the_whole_run() -> None:
