@@ -270,6 +270,28 @@ def _sense_cones(
 
 
 @numba.njit(cache=True, inline="always")
+def _fan_ends(
+    x: float, y: float, s: int, n_sub: int, n_rays: int, length: float, trig: np.ndarray,
+    ends: np.ndarray,
+) -> tuple[float, float, float, float]:  # fmt: skip
+    """Sonar ``s``'s sub-arc rays from ``(x, y)``: their ends into ``ends`` and the box
+    ``(x0, y0, x1, y1)`` around the robot and them (``trig``: a cache row of
+    :func:`_ray_directions`)."""
+    x0 = x1 = x
+    y0 = y1 = y
+    for i in range(n_sub):
+        ex = x + length * trig[1 + s * n_sub + i]
+        ey = y + length * trig[1 + n_rays + s * n_sub + i]
+        ends[i, 0] = ex
+        ends[i, 1] = ey
+        x0 = min(x0, ex)
+        x1 = max(x1, ex)
+        y0 = min(y0, ey)
+        y1 = max(y1, ey)
+    return x0, y0, x1, y1
+
+
+@numba.njit(cache=True, inline="always")
 def _sense_sub_arcs(
     x: float,
     y: float,
@@ -294,17 +316,7 @@ def _sense_sub_arcs(
     active = np.empty(walls.shape[0], np.int64)
     ends = np.empty((n_sub, 2))
     for s in range(n_sonar):
-        x0 = x1 = x
-        y0 = y1 = y
-        for i in range(n_sub):
-            ex = x + length * trig[1 + s * n_sub + i]
-            ey = y + length * trig[1 + n_rays + s * n_sub + i]
-            ends[i, 0] = ex
-            ends[i, 1] = ey
-            x0 = min(x0, ex)
-            x1 = max(x1, ex)
-            y0 = min(y0, ey)
-            y1 = max(y1, ey)
+        x0, y0, x1, y1 = _fan_ends(x, y, s, n_sub, n_rays, length, trig, ends)
         n = walls_in_box(x0, y0, x1, y1, walls, near, n_near, active)
         nearest = np.inf
         for i in range(n_sub):
@@ -461,17 +473,7 @@ def _sense_sub_arcs_among(
     active_r = np.empty(n_r, np.int64)
     ends = np.empty((n_sub, 2))
     for s in range(n_sonar):
-        x0 = x1 = x
-        y0 = y1 = y
-        for i in range(n_sub):
-            ex = x + length * trig[1 + s * n_sub + i]
-            ey = y + length * trig[1 + n_rays + s * n_sub + i]
-            ends[i, 0] = ex
-            ends[i, 1] = ey
-            x0 = min(x0, ex)
-            x1 = max(x1, ex)
-            y0 = min(y0, ey)
-            y1 = max(y1, ey)
+        x0, y0, x1, y1 = _fan_ends(x, y, s, n_sub, n_rays, length, trig, ends)
         n = walls_in_box(x0, y0, x1, y1, walls, near, n_near, active)
         # the robots whose circle reaches the fan between the first and last rays (the
         # half-planes of their lines and the one ahead, grown by R and the cull margin)

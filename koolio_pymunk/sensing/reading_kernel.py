@@ -59,6 +59,31 @@ def reading_group(suite) -> tuple:
             k.codes, flags, u)  # fmt: skip
 
 
+@numba.njit(cache=True, inline="always")
+def _realism_draws(rng, gaussian: bool, n_raw: int, n_draws: int, noise, u) -> None:
+    """A reading's draws with a realism model on, one by one, in the reference's order:
+    gaussian noise then the realism uniforms, or (uniform noise) all as uniforms."""
+    if gaussian:
+        for i in range(n_raw):
+            noise[i] = rng.standard_normal()
+        for i in range(n_draws):
+            u[i] = rng.random()
+    else:
+        for i in range(n_raw + n_draws):
+            u[i] = rng.random()
+
+
+@numba.njit(cache=True, inline="always")
+def _noise_draws(rng, gaussian: bool, n_raw: int, noise) -> None:
+    """An ideal reading's noise draws, one by one (the paper's model: uniform in [-1, 1])."""
+    if gaussian:
+        for i in range(n_raw):
+            noise[i] = rng.standard_normal()
+    else:
+        for i in range(n_raw):
+            noise[i] = rng.uniform(-1.0, 1.0)
+
+
 @numba.njit(cache=True)
 def sense_reading(x: float, y: float, h: float, rng, sense: tuple) -> tuple[int, bool, bool]:
     """``KernelInputs.sense_readout`` at ``(x, y, h)``: ``(state key, bump, goal close)``,
@@ -68,23 +93,11 @@ def sense_reading(x: float, y: float, h: float, rng, sense: tuple) -> tuple[int,
     geometry, goal, plates, buffers, encoding, realism, noise, out, codes, flags, u = sense
     real_on, gaussian, n_raw, n_draws = flags[0] == 1, flags[1] == 1, flags[2], flags[3]
     if real_on:
-        if gaussian:
-            for i in range(n_raw):
-                noise[i] = rng.standard_normal()
-            for i in range(n_draws):
-                u[i] = rng.random()
-        else:
-            for i in range(n_raw + n_draws):
-                u[i] = rng.random()
+        _realism_draws(rng, gaussian, n_raw, n_draws, noise, u)
         return sense_realism(x, y, h, geometry, goal, plates, buffers, noise, u, not gaussian,
                              realism, encoding, out, codes)  # fmt: skip
     sense_one_inline(x, y, h, geometry, goal, plates, buffers)
-    if gaussian:
-        for i in range(n_raw):
-            noise[i] = rng.standard_normal()
-    else:
-        for i in range(n_raw):
-            noise[i] = rng.uniform(-1.0, 1.0)
+    _noise_draws(rng, gaussian, n_raw, noise)
     return readout_inline(buffers[0], noise, encoding, out, buffers[2], codes)
 
 
@@ -98,24 +111,12 @@ def sense_reading_among(
     geometry, goal, plates, buffers, encoding, realism, noise, out, codes, flags, u = sense
     real_on, gaussian, n_raw, n_draws = flags[0] == 1, flags[1] == 1, flags[2], flags[3]
     if real_on:
-        if gaussian:
-            for i in range(n_raw):
-                noise[i] = rng.standard_normal()
-            for i in range(n_draws):
-                u[i] = rng.random()
-        else:
-            for i in range(n_raw + n_draws):
-                u[i] = rng.random()
+        _realism_draws(rng, gaussian, n_raw, n_draws, noise, u)
         return sense_realism_among(x, y, h, geometry, goal, plates, buffers, noise, u,
                                    not gaussian, realism, encoding, out, codes,
                                    others)  # fmt: skip
     sense_among_inline(x, y, h, geometry, goal, plates, buffers, others)
-    if gaussian:
-        for i in range(n_raw):
-            noise[i] = rng.standard_normal()
-    else:
-        for i in range(n_raw):
-            noise[i] = rng.uniform(-1.0, 1.0)
+    _noise_draws(rng, gaussian, n_raw, noise)
     return readout_inline(buffers[0], noise, encoding, out, buffers[2], codes)
 
 
