@@ -180,3 +180,13 @@ def edit_header(data: bytes, **changes: object) -> bytes:
             node = node[part]
         node[parts[-1]] = value
     return with_header(data, json.dumps(header).encode())
+
+
+def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
+    """``koolio-pm argv`` in this process: exit status, stdout, stderr."""
+    try:
+        code = cli.main(list(argv))
+    except SystemExit as exc:
+        code = exc.code
+    out, err = capsys.readouterr()
+    return int(code or 0), out, err

@@ -16,29 +16,13 @@ import pytest
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
 
+from inputs import run
+
 from koolio_pymunk.apps import cli
 from koolio_pymunk.store.episode_log import log_rows
 
 REPO = Path(__file__).resolve().parents[2]
 XDG_LINE = "XDG_RUNTIME_DIR is invalid or not set"
-
-
-@pytest.fixture
-def here(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
-    """An empty working folder with a tiny configuration (30-step episodes)."""
-    (tmp_path / "tiny.yaml").write_text("episode: {max_steps: 30}\n")
-    monkeypatch.chdir(tmp_path)
-    return tmp_path
-
-
-def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
-    """``koolio-pm argv``: exit status, stdout, stderr."""
-    try:
-        code = cli.main(list(argv))
-    except SystemExit as exc:
-        code = exc.code
-    out, err = capsys.readouterr()
-    return int(code or 0), out, err
 
 
 def no_display_env() -> dict[str, str]:

@@ -18,7 +18,7 @@ import pytest
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
 
-from inputs import learned, open_table
+from inputs import learned, open_table, run
 
 from koolio_pymunk.apps import cli
 from koolio_pymunk.learning.qtable import QTableStore, load_qtable
@@ -30,24 +30,6 @@ from tests.inputs import expect_error, header_of
 
 REPO = Path(__file__).resolve().parents[2]
 ROOM = ["--arena", "room", "--config", "tiny.yaml"]
-
-
-@pytest.fixture
-def here(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
-    """An empty working folder with a tiny configuration (30-step episodes)."""
-    (tmp_path / "tiny.yaml").write_text("episode: {max_steps: 30}\n")
-    monkeypatch.chdir(tmp_path)
-    return tmp_path
-
-
-def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
-    """``koolio-pm argv``: exit status, stdout, stderr."""
-    try:
-        code = cli.main(list(argv))
-    except SystemExit as exc:
-        code = exc.code
-    out, err = capsys.readouterr()
-    return int(code or 0), out, err
 
 
 def files_of(folder: Path) -> dict[str, bytes]:
