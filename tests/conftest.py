@@ -32,3 +32,12 @@ def tiny_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
     args += [str(folder / "tiny.yaml"), "--qtable", str(folder / "q.qtable")]
     assert cli.main([*args, "--log", str(folder / "log.csv")]) == 0
     return folder
+
+
+@pytest.fixture
+def here(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """An empty working folder with a tiny configuration (30-step episodes), the current
+    folder (a test module may define its own ``here``)."""
+    (tmp_path / "tiny.yaml").write_text("episode: {max_steps: 30}\n")
+    monkeypatch.chdir(tmp_path)
+    return tmp_path
