@@ -170,6 +170,17 @@ def learning_loop(
     return out
 
 
+def best_cpu_us(fn: Callable[[], object], repeats: int, count: int) -> float:
+    """Microseconds of CPU per item: the best of ``repeats`` calls of ``fn``, which does
+    ``count`` items."""
+    times = []
+    for _ in range(repeats):
+        t0 = time.process_time()
+        fn()
+        times.append(time.process_time() - t0)
+    return round(1e6 * min(times) / count, 3)
+
+
 def ratio(a: dict, b: dict, key: str = "per_cpu_s", digits: int = 2) -> float:
     """``a[key] / b[key]``, rounded."""
     return round(a[key] / max(1e-9, b[key]), digits)
@@ -605,12 +616,7 @@ def shared_costs(poses: int, robots: int = 8, repeats: int = 5) -> dict:
             keys[i] = sense_reading_among(pts[i, 0], pts[i, 1], hs[i], rng, sense, others)[0]
 
     def best(fn) -> float:
-        times = []
-        for _ in range(repeats):
-            t0 = time.process_time()
-            fn()
-            times.append(time.process_time() - t0)
-        return round(1e6 * min(times) / poses, 3)
+        return best_cpu_us(fn, repeats, poses)
 
     arena = load_arena("hallway")
     laid = arena.to_world()
@@ -741,12 +747,7 @@ def step_costs(
     keys = np.empty(poses, np.int64)
 
     def best(fn) -> float:
-        times = []
-        for _ in range(repeats):
-            t0 = time.process_time()
-            fn()
-            times.append(time.process_time() - t0)
-        return round(1e6 * min(times) / poses, 3)
+        return best_cpu_us(fn, repeats, poses)
 
     sensing(pts[:1], hs[:1], rng, sense, keys[:1])
     moving(pts[:1], hs[:1], actions[:1], rng, world, motion)
