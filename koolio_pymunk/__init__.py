@@ -10,6 +10,9 @@ them)::
 
     env = gym.make("koolio_pymunk/Hallway-v0")
 
+Robots sharing one arena are a PettingZoo ``ParallelEnv``
+(``koolio_pymunk.parallel_env(robots=4)``, the ``multi`` extra; docs/multi-robot.md).
+
 The import is light: :class:`KoolioEnv` (and with it pymunk and the numba-compiled
 sensing kernels) is loaded on first use, so the command line's ``--help``, ``info``,
 ``check-arena``, ``export`` and ``plot`` start without compiling anything.
@@ -25,7 +28,7 @@ from .task.registry import register_envs
 if TYPE_CHECKING:
     from .task.env import KoolioEnv
 
-__all__ = ["KoolioEnv", "__version__"]
+__all__ = ["KoolioEnv", "__version__", "parallel_env"]
 
 register_envs()
 
@@ -36,4 +39,11 @@ def __getattr__(name: str) -> Any:
         from .task.env import KoolioEnv
 
         return KoolioEnv
+    if name == "parallel_env":
+        from .store.extras import multi_extra
+
+        with multi_extra("parallel_env"):
+            from .task.parallel_env import parallel_env
+
+        return parallel_env
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

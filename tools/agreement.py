@@ -101,18 +101,30 @@ def run_moves(
         return [f.result() for f in futures]
 
 
-def _side(arena: str, world: str | None, overrides: dict, seed: int, robots: int, compiled: bool):
-    """One side of :func:`compare_robots`: an env, a table, the robots' learners, the loop."""
+def _side(
+    arena: str,
+    world: str | None,
+    overrides: dict,
+    seed: int,
+    robots: int,
+    compiled: bool,
+    shared: bool = False,
+):
+    """One side of :func:`compare_robots`: an env, a table, the robots' learners, the loop
+    (``shared``: the robots in one arena)."""
     from koolio_pymunk.learning.algorithms import make_learner
     from koolio_pymunk.learning.engine import robots as make_robots
     from koolio_pymunk.learning.qtable import QTable
     from koolio_pymunk.store.config import load_config
     from koolio_pymunk.task.env import KoolioEnv
+    from koolio_pymunk.task.shared_arena import SharedArena
 
-    env = KoolioEnv(arena, config=load_config(overrides=overrides, world=world))
-    table = QTable(env.layout, {}, env.config.learner.q_init)
-    agents = [make_learner(table, env.config.learner, None) for _ in range(robots)]
-    loop = make_robots(env, agents, seed, compiled=compiled)
+    cfg = load_config(overrides=overrides, world=world)
+    envs = SharedArena.envs(robots, arena, cfg) if shared else KoolioEnv(arena, config=cfg)
+    layout = envs[0].layout if shared else envs.layout
+    table = QTable(layout, {}, cfg.learner.q_init)
+    agents = [make_learner(table, cfg.learner, None) for _ in range(robots)]
+    loop = make_robots(envs, agents, seed, compiled=compiled)
     if compiled and loop.python_reason is not None:
         raise ValueError(f"this configuration does not run compiled: {loop.python_reason}")
     return table, loop
@@ -126,7 +138,9 @@ def _snapshot(loop) -> list:
     for env, agent in zip(loop.envs, loop.agents):
         out.append(
             (
-                env.world.pose(0),
+                env.world.pose(env.robot),
+                bool(env.world.present[env.robot]) if env.share is not None else True,
+                env.waiting,
                 env.state_key,
                 env.codes,
                 (env.steps, env.bumps, env.episode_reward, env.has_been_rescued),
@@ -147,9 +161,11 @@ def compare_robots(
     robots: int = 1,
     overrides: dict | None = None,
     max_steps: int | None = None,
+    shared: bool = False,
 ) -> dict:
     """Train ``episodes`` seeded episodes of ``robots`` robots in ``arena`` (in ``world``,
-    ``overrides`` laid over the configuration, ``max_steps`` the step cap) twice, on the
+    ``overrides`` laid over the configuration, ``max_steps`` the step cap; ``shared``: all
+    in one arena, :mod:`koolio_pymunk.task.shared_arena`) twice, on the
     Python loop (:class:`koolio_pymunk.learning.episodes.Robots`, the reference) and on the
     compiled step engine, and compare after every finished episode its log row, the whole
     Q-table and every robot's pose, state, counters, memory, generators and learner, bit
@@ -163,7 +179,9 @@ def compare_robots(
     if max_steps is not None:
         over["episode"] = {**over.get("episode", {}), "max_steps": max_steps}
     t = time.perf_counter()
-    sides = [_side(arena, world, over, seed, robots, compiled) for compiled in (False, True)]
+    sides = [
+        _side(arena, world, over, seed, robots, compiled, shared) for compiled in (False, True)
+    ]
     started = [0, 0]
     for (_, loop), k in zip(sides, range(2)):
         for r in range(min(robots, episodes)):

@@ -154,6 +154,30 @@ def add_learning_files_args(p: argparse.ArgumentParser) -> None:
     p.set_defaults(files_follow_arena=True)
 
 
+def add_shared_arena_arg(p: argparse.ArgumentParser) -> None:
+    """``--shared-arena`` (train, eval, view)."""
+    p.add_argument(
+        "--shared-arena",
+        action="store_true",
+        help="with --robots N: the robots share one arena, bodies to each other "
+        "(docs/multi-robot.md)",
+    )
+
+
+def check_shared_arena(args: argparse.Namespace, env) -> None:
+    """``--shared-arena``'s combinations, before any file is touched: it needs --robots N
+    with N >= 2, and the robots must fit their start areas (one line each)."""
+    if not getattr(args, "shared_arena", False):
+        return
+    if args.robots < 2:
+        raise KoolioError(
+            "--shared-arena: needs --robots N with N >= 2 (the robots that share the arena)"
+        )
+    from ..task.shared_arena import SharedArena
+
+    SharedArena(env.arena, env.config, args.robots)  # the start areas hold the robots
+
+
 def resolve_files(args: argparse.Namespace) -> None:
     """Fill in the default ``--qtable`` / ``--log``, refuse empty names.
 
@@ -248,8 +272,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--robots",
         type=int_type(1, MAX_ROBOTS),
         default=1,
-        help="robots learning into one shared table, each in its own copy of the arena (default 1)",
+        help="robots learning into one shared table, each in its own copy of the arena (default "
+        "1; with --shared-arena all in one)",
     )
+    add_shared_arena_arg(p)
     p.add_argument(
         "--init-qtable",
         default=None,
@@ -288,6 +314,14 @@ def build_parser() -> argparse.ArgumentParser:
         help="episodes per goal, at least 1 (default 100)",
     )
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
+    p.add_argument(
+        "--robots",
+        type=int_type(1, MAX_ROBOTS),
+        default=1,
+        help="robots playing episodes at once, each in its own copy of the arena (the same "
+        "scores as one after another; default 1), or with --shared-arena all in one",
+    )
+    add_shared_arena_arg(p)
     p.add_argument(
         "--epsilon",
         type=float_type(0.0, 1.0),
@@ -438,6 +472,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     # and no file (not even a lock file) is left behind.
     if args.robots > 1 and args.discard_unfinished:
         check_discard(env, args.robots)
+    check_shared_arena(args, env)
     if args.init_qtable:
         start = _check_init_table(args.init_qtable, store, args.log, env)
     else:
@@ -471,6 +506,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         robots=args.robots,
         fsync=args.fsync,
         tensorboard=args.tensorboard,
+        shared_arena=args.shared_arena,
     )
     if args.verbose and result.python_reason is not None:
         say(f"stepped in the Python loop: {result.python_reason}")
@@ -633,7 +669,7 @@ def _print_configuration(args: argparse.Namespace, env, say) -> None:
         ("log", args.log or "none (--log '')"),
         ("config", config_label(args.config)),
         ("world", config_label(args.world, "--world")),
-        ("robots", args.robots),
+        ("robots", f"{args.robots}, sharing one arena" if args.shared_arena else args.robots),
     ]
     if args.init_qtable:
         rows.append(("init-qtable", f"{args.init_qtable} (the new table starts from it)"))
@@ -750,6 +786,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
     if goal_all:
         args.goal = None
     env = _make_env(args)
+    check_shared_arena(args, env)
     table = read_table(args.qtable)
     policy = is_policy_file(args.qtable)
     # --goal all scores every door: it asks what a random-goal run asks of the table
@@ -759,7 +796,17 @@ def cmd_eval(args: argparse.Namespace) -> int:
     announce_compile(env)
     epsilon = eps or 0.0
     results = [
-        evaluate(env, table, args.episodes, args.seed, goal=g, epsilon=epsilon) for g in goals
+        evaluate(
+            env,
+            table,
+            args.episodes,
+            args.seed,
+            goal=g,
+            epsilon=epsilon,
+            robots=args.robots,
+            shared_arena=args.shared_arena,
+        )
+        for g in goals
     ]
     if args.json:
         out = [r.as_dict() | {"epsilon": epsilon} for r in results]
@@ -776,6 +823,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
     print(
         f"  scored in {where}: {count(args.episodes, 'episode')} per goal, seed {args.seed}, "
         f"epsilon {epsilon:g}, no learning"
+        + (f", {args.robots} robots sharing the arena" if args.shared_arena else "")
     )
     rate = "greedy goal rate" if not epsilon else "goal rate"
     print(
@@ -788,6 +836,9 @@ def cmd_eval(args: argparse.Namespace) -> int:
             f"{r.wrong_door_rate:>11.1%} {r.truncated_rate:>9.1%} {r.mean_steps:>11.1f} "
             f"{r.mean_bumps:>11.1f} {r.mean_reward:>12.1f}"
         )
+        if r.robot_goal_rates is not None:
+            rates = ", ".join(f"{k} {v:.1%}" for k, v in enumerate(r.robot_goal_rates))
+            print(f"  {'':>6} by robot in the shared arena: {rates}")
     if goal_all:
         mean = sum(r.goal_rate for r in results) / len(results)
         print(f"  {'all':>6} {mean:>16.1%}")

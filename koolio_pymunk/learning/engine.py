@@ -44,10 +44,11 @@ from collections.abc import Callable
 import numba
 import numpy as np
 
-from ..sensing.reading_kernel import robot_group
+from ..sensing.reading_kernel import robot_group, robot_others
 from ..store.kernel_cache import ensure_fresh
 from ..task.batch import EnvBatch, Generators
 from ..task.env import WRONG_DOOR, KoolioEnv
+from ..task.shared_arena import SharedArena
 from ..task.step_kernel import (
     EVENTS,
     F_RETURN,
@@ -89,12 +90,14 @@ ensure_fresh()  # numba's cache, in step with every kernel's source (see there)
 CHUNK = 4096
 #: :func:`run`'s answers: a robot finished its episode (``ctl[C_ROBOT]``,
 #: ``ctl[C_OUTCOME]``); the budget of robot-steps is spent; a robot's journal needs room;
-#: no robot is running.
-FINISHED, BUDGET, NEED_ROOM, IDLE = 0, 1, 2, 3
+#: no robot is running; a robot waiting outside a shared arena has its turn
+#: (``ctl[C_ROBOT]``: Python draws its start spot, :meth:`EnvBatch.enter`).
+FINISHED, BUDGET, NEED_ROOM, IDLE, ENTER = 0, 1, 2, 3, 4
 #: ``ctl``: the next robot to step, the robot that finished and its outcome code.
 C_CURSOR, C_ROBOT, C_OUTCOME = range(3)
-#: ``lints`` of a robot: running an episode, its last action (the no-undo rule; -1: none).
-L_ACTIVE, L_LAST = range(2)
+#: ``lints`` of a robot: running an episode, its last action (the no-undo rule; -1: none),
+#: waiting outside a shared arena for a free start spot.
+L_ACTIVE, L_LAST, L_WAITING = range(3)
 
 
 def why_not_config(env: KoolioEnv) -> str | None:
@@ -120,8 +123,9 @@ def why_not(env: KoolioEnv, agent: object) -> str | None:
 
 @numba.njit(cache=True, inline="always")
 def _step(r: int, gens, agens, readings, world, motion, task, memory, ints, floats, mem,
-          learner, lints, epsilon, index, table, lam, traces, journal) -> int:  # fmt: skip
-    """Robot ``r``'s step (module doc); its outcome code, or :data:`RUNNING`."""
+          among, learner, lints, epsilon, index, table, lam, traces, journal) -> int:  # fmt: skip
+    """Robot ``r``'s step (module doc); its outcome code, or :data:`RUNNING`. In a shared
+    arena a robot whose episode ended leaves it (its ``present`` flag, ``among[1]``)."""
     alpha, gamma, n_actions, no_undo, learn = learner
     lambda_on = lam[0]
     t_meta = traces[3][r]
@@ -135,8 +139,9 @@ def _step(r: int, gens, agens, readings, world, motion, task, memory, ints, floa
         t_meta[0] = 0  # Watkins's cut
     lints[r, L_LAST] = action
     rng, sense = gens[r], robot_group(r, readings[0], readings[1])
+    others = robot_others(r, among[0], among[1], among[2])
     nxt, code, reward, terminated, truncated = simulate_inline(
-        r, action, rng, sense, world, motion, task, memory, ints, floats, mem
+        r, action, rng, sense, world, motion, task, memory, ints, floats, mem, others
     )
     if learn:
         if lambda_on:
@@ -146,8 +151,10 @@ def _step(r: int, gens, agens, readings, world, motion, task, memory, ints, floa
         else:
             update_inline(index, table, alpha, gamma, state, action, reward, nxt, terminated, r,
                    journal)  # fmt: skip
-    if rescue_check_inline(r, rng, sense, world, task, memory, ints, floats, mem):
+    if rescue_check_inline(r, rng, sense, world, task, memory, ints, floats, mem, others):
         lints[r, L_LAST] = -1  # QLearner.relocated
+    if (terminated or truncated) and among[0].shape[0] > 0:
+        among[1][r] = False  # KoolioEnv.leave
     if terminated:
         return code
     if truncated:
@@ -159,13 +166,15 @@ def _step(r: int, gens, agens, readings, world, motion, task, memory, ints, floa
 def run(
     budget: int, ctl: np.ndarray, gens, agens, readings: tuple, world: tuple, motion: np.ndarray,
     task: tuple, memory: tuple, ints: np.ndarray, floats: np.ndarray, mem: np.ndarray,
-    learner: tuple, lints: np.ndarray, epsilon: np.ndarray, index, table: tuple, lam: tuple,
-    traces: tuple, journal: tuple, writes: int,
+    among: tuple, learner: tuple, lints: np.ndarray, epsilon: np.ndarray, index, table: tuple,
+    lam: tuple, traces: tuple, journal: tuple, writes: int,
 ) -> int:  # fmt: skip
     """At most ``budget`` robot-steps from robot ``ctl[C_CURSOR]`` on, in tick order
     (module doc); returns :data:`FINISHED` at the first finished episode, else
     :data:`BUDGET`, :data:`NEED_ROOM` (a running robot's journal lacks room for
-    ``writes`` more entries) or :data:`IDLE`.
+    ``writes`` more entries), :data:`IDLE`, or :data:`ENTER` at the turn of a robot
+    waiting outside a shared arena (``among``:
+    :attr:`~koolio_pymunk.task.batch.EnvBatch.among`).
 
     Per robot: ``gens``/``agens`` its env's and learner's generators, its row of
     ``readings`` (``(shared, rows)`` of
@@ -192,11 +201,15 @@ def run(
         if r >= n:
             r = 0
         if lints[r, L_ACTIVE]:
+            if lints[r, L_WAITING]:
+                ctl[C_CURSOR] = r + 1
+                ctl[C_ROBOT] = r
+                return ENTER
             if room > 0 and jn[r] + writes > room:
                 ctl[C_CURSOR] = r
                 return NEED_ROOM
             outcome = _step(r, gens, agens, readings, world, motion, task, memory, ints, floats,
-                            mem, learner, lints, epsilon, index, table, lam, traces,
+                            mem, among, learner, lints, epsilon, index, table, lam, traces,
                             journal)  # fmt: skip
             done += 1
             if outcome != RUNNING:
@@ -260,7 +273,7 @@ class Engine(Robots):
         first = agents[0]
         self.shared = SharedTable(first.table)
         self.ctl = np.zeros(3, np.int64)
-        self.lints = np.zeros((n, 2), np.int64)
+        self.lints = np.zeros((n, 3), np.int64)
         self.lints[:, L_LAST] = -1
         self.epsilon_of = np.zeros(n)
         """Each robot's epsilon for its episode."""
@@ -290,7 +303,7 @@ class Engine(Robots):
         if self.epsilon is not None:
             agent.epsilon = self.epsilon
         self.epsilon_of[r] = agent.epsilon
-        self.lints[r] = (1, agent.last)
+        self.lints[r] = (1, agent.last, int(env.waiting))
         self.traces[3][r] = (0, -1)
         self.journal[2][r] = 0
         self.episodes[r] = episode
@@ -307,14 +320,19 @@ class Engine(Robots):
             sh.reserve(CHUNK + 1)
             self._trace_room()
             why = run(CHUNK, self.ctl, b.generators.typed, self.agent_gens.typed, b.reading_args,
-                      b.world, b.motion, b.task, b.memory, b.ints, b.floats, b.mem,
+                      b.world, b.motion, b.task, b.memory, b.ints, b.floats, b.mem, b.among,
                       self.learner, self.lints, self.epsilon_of, sh.index, sh.args(), self.lam,
                       self.traces, self.journal, writes)  # fmt: skip
             if why == FINISHED:
                 r = int(self.ctl[C_ROBOT])
                 self.codes[r] = self.ctl[C_OUTCOME]
                 self.running[r] = False
+                self.envs[r].leave()  # the pymunk world as the compiled step left it
                 return r
+            if why == ENTER:
+                r = int(self.ctl[C_ROBOT])
+                self.lints[r, L_WAITING] = int(not b.enter(r))
+                continue
             if why == IDLE:
                 return None
             if why == NEED_ROOM:
@@ -419,14 +437,19 @@ def robots(
     epsilon: float | None = None,
     compiled: bool = True,
     journal: bool = False,
+    shared: bool = False,
 ) -> Robots:
     """The episodes of ``len(agents)`` robots (``envs``: one per robot, or one env and
-    the batch is made of it and its siblings): on the compiled step engine
+    the batch is made of it and its siblings, or with ``shared`` of robots like it sharing
+    one arena, :meth:`SharedArena.of <koolio_pymunk.task.shared_arena.SharedArena.of>`):
+    on the compiled step engine
     (:class:`~koolio_pymunk.learning.engine.Engine`) when ``compiled`` and it runs them,
     else the Python loop (:class:`~.episodes.Robots`); its ``python_reason`` says why
     the Python loop (None: the engine)."""
     n = len(agents)
-    if isinstance(envs, KoolioEnv):
+    if isinstance(envs, KoolioEnv) and shared:
+        envs = SharedArena.of(envs, n)
+    elif isinstance(envs, KoolioEnv):
         envs = [envs] + [envs.sibling() for _ in range(n - 1)]
     reason = "not asked for" if not compiled else None
     if reason is None:

@@ -177,8 +177,14 @@ class Episodes:
         self.outcome = None
 
     def step(self) -> str | None:
-        """One step: act -> simulate -> learn -> rescue check; the outcome at the end."""
+        """One step: act -> simulate -> learn -> rescue check; the outcome at the end. In
+        a shared arena (:mod:`koolio_pymunk.task.shared_arena`) a robot whose episode
+        ended then leaves the arena, and a robot waiting for a free start spot spends its
+        turn asking for one (:meth:`KoolioEnv.enter`) instead of stepping."""
         env, agent = self.env, self.agent
+        if env.waiting:
+            env.enter()
+            return None
         state = env.state_key
         action = agent.act(state)
         nxt, reward, terminated, truncated = env.simulate(action)
@@ -192,6 +198,8 @@ class Episodes:
             self.outcome = env.judgement.event  # type: ignore[union-attr]
         elif truncated:
             self.outcome = TRUNCATED
+        if self.outcome is not None:
+            env.leave()
         return self.outcome
 
     def run(self, stop: Callable[[], bool | None] | None = None) -> EpisodeResult:

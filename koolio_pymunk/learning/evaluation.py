@@ -100,6 +100,10 @@ class EvalResult:
     mean_bumps: float
     mean_reward: float
     goal: str
+    robot_goal_rates: list[float] | None = None
+    """Robots sharing an arena (``shared_arena``): each robot's goal rate over the
+    episodes it played (None: the robots were alone, and which robot played an episode
+    does not matter)."""
 
     def as_dict(self) -> dict[str, Any]:
         """The figures by name (``koolio-pm eval --json``)."""
@@ -120,6 +124,7 @@ def evaluate(
     stop: Callable[[], bool] | None = None,
     robots: int = 1,
     compiled: bool = True,
+    shared_arena: bool = False,
 ) -> EvalResult:
     """Run ``table``'s policy for ``episodes`` episodes without learning (module doc).
 
@@ -135,17 +140,21 @@ def evaluate(
     ``robots`` > 1 plays that many episodes at once (``env`` and its siblings, on the
     compiled step engine when it runs this configuration, ``compiled``): episode ``e``
     has its own seeds whichever robot plays it and the table is only read, so the scores
-    are exactly those of one episode after another.
+    are exactly those of one episode after another. With ``shared_arena`` the robots
+    play in one arena, meeting each other (:mod:`koolio_pymunk.task.shared_arena`): an
+    episode's course then depends on the others, and the result gives each robot's goal
+    rate too.
     """
     from .engine import robots as make_robots  # numba: loaded when an evaluation starts
 
     options = {"goal": goal} if goal else None
     env.check_options(options)
-    n = max(1, min(robots, episodes))
+    n = max(1, min(robots, episodes)) if not shared_arena else max(1, robots)
     agents = [QLearner(table, env.config.learner, None) for _ in range(n)]
     loop = make_robots(env, agents, seed, EVAL_STREAM, learn=False, epsilon=epsilon,
-                       compiled=compiled)  # fmt: skip
+                       compiled=compiled, shared=shared_arena)  # fmt: skip
     results: list[EpisodeResult | None] = [None] * episodes
+    players = [0] * episodes
     started = 0
 
     def start(r: int) -> None:
@@ -166,6 +175,7 @@ def evaluate(
             break
         res = loop.result(r)
         results[res.episode] = res
+        players[res.episode] = r
         start(r)
     loop.sync()
     done = [res for res in results if res is not None]
@@ -184,7 +194,14 @@ def evaluate(
         mean_bumps=float(np.mean(bumps)) if bumps else 0.0,
         mean_reward=float(np.mean(rewards)) if rewards else 0.0,
         goal="random" if env.random_goal and not goal else env.goal_name,
+        robot_goal_rates=_robot_goal_rates(done, players, n) if shared_arena else None,
     )
+
+
+def _robot_goal_rates(done: list[EpisodeResult], players: list[int], n: int) -> list[float]:
+    """Each robot's goal rate over the episodes it played (0 for a robot that played none)."""
+    played = [[res.outcome for res in done if players[res.episode] == r] for r in range(n)]
+    return [p.count("goal") / len(p) if p else 0.0 for p in played]
 
 
 def best_path(table: str | Path) -> Path:

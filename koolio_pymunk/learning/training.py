@@ -356,6 +356,7 @@ def train(
     robots: int = 1,
     fsync: str = "second",
     tensorboard: str | Path | None = None,
+    shared_arena: bool = False,
 ) -> TrainResult:
     """Train ``robots`` robots for ``episodes`` more episodes into one table (``koolio-pm
     train --episodes N`` is the total the table reaches: it passes N minus the episodes
@@ -364,7 +365,9 @@ def train(
     every ``save_seconds`` seconds, and always at the end.
 
     **Robots.** Each robot runs its own episodes in its own copy of the arena (``env`` is
-    robot 0's; the others are its siblings) and learns into the shared table; the robots
+    robot 0's; the others are its siblings), or with ``shared_arena`` all in one arena as
+    bodies to each other (robots like ``env``: :mod:`koolio_pymunk.task.shared_arena`), and
+    learns into the shared table; the robots
     step in tick order (:class:`~koolio_pymunk.learning.episodes.Robots`). Episode starts
     are numbered from the table's count in the order they begin (robot order at first,
     then as robots finish), and a start's number gives its seeds and its epsilon; finished
@@ -435,7 +438,9 @@ def train(
     table, first = files.table, files.first
     agents = [make_learner(table, cfg.learner, None, str(store.path)) for _ in range(n)]
     journal = discard_unfinished and n > 1
-    loop = make_robots(env, agents, seed, TRAIN_STREAM, compiled=compiled, journal=journal)
+    loop = make_robots(
+        env, agents, seed, TRAIN_STREAM, compiled=compiled, journal=journal, shared=shared_arena
+    )
     files.before_save = loop.sync_table
     files.changed_rows = loop.changed_rows
     scalars = None

@@ -233,6 +233,40 @@ class RewardConfig:
     """RotateLeft or RotateRight."""
     forward: float = -0.5
     """The cheapest action: the task is a long drive down a hallway."""
+    robot_bump: float | None = None
+    """A sonar reads Bump from another robot's surface (a shared arena, ``--shared-arena``;
+    it comes before the wall's ``bump``). None, the default: the ``bump`` value (the
+    paper's rule sees no difference between a wall and a robot; docs/multi-robot.md)."""
+
+    def value(self, event: str) -> float:
+        """The reward of ``event`` (a term of ``task.rules.TERMS``)."""
+        if event == "robot_bump" and self.robot_bump is None:
+            return float(self.bump)
+        return float(getattr(self, event))
+
+
+@dataclass
+class SharedArenaConfig:
+    """Robots sharing one arena (``--shared-arena``; docs/multi-robot.md). Ignored when
+    each robot has an arena of its own."""
+
+    start_spread: float = 96.0
+    """Start spots lie within this many inches of a robot's start point (0..1000), on a
+    square grid one robot diameter plus ``start_gap`` apart, each ``start_gap`` clear of
+    the walls and outside the end-of-world zones: a robot starts on a spot drawn from those
+    no other robot covers. 96 in gives the hallway's start 6 spots in a row."""
+    start_gap: float = 8.0
+    """Inches between a spot's robot and the walls, and between the robots of two
+    neighbouring spots (0..100): more than the sonar's Bump distance (6 in) with its noise
+    (10 %), so no robot starts reading Bump."""
+    starts: list[list[float]] = field(default_factory=list)
+    """Robot ``k``'s start point ``[x, y]`` (inches, arena coordinates) is ``starts[k]``;
+    robots beyond the list (and every robot when it is empty, the default) start from the
+    arena's start point. The heading is the arena's (or a random one)."""
+    goals: list[str] = field(default_factory=list)
+    """Robot ``k``'s goal is ``goals[k]`` (a goal name of the arena); robots beyond the
+    list take the run's goal (``--goal``). The crossing example
+    (``examples/crossing.yaml``) gives two robots their own starts and goals."""
 
 
 @dataclass
@@ -350,6 +384,8 @@ class Config:
     learner: LearnerConfig = field(default_factory=LearnerConfig)
     realism: RealismConfig = field(default_factory=RealismConfig)
     """The realism models (:mod:`koolio_pymunk.sensing.realism`): off unless a world sets them."""
+    shared: SharedArenaConfig = field(default_factory=SharedArenaConfig)
+    """Robots sharing one arena (``--shared-arena``): their start spots, starts and goals."""
 
     def validate(self, source: str = "<config>") -> Config:
         """Check ranges; raise ConfigError naming the item. Returns self."""
@@ -778,6 +814,23 @@ def _validate(cfg: Config, src: str) -> None:
     )
     _check_lists(cfg, src)
     _check_keyword_bits(cfg, src)
+    _check_shared(cfg.shared, src)
+
+
+def _check_shared(sh: SharedArenaConfig, src: str) -> None:
+    """The shared arena's section (its points are checked against the arena where the
+    robots are placed: :mod:`koolio_pymunk.task.shared_arena`)."""
+    _check(0 <= sh.start_spread <= 1000, src, "shared.start_spread", "must be in [0, 1000] inches")
+    _check(0 <= sh.start_gap <= 100, src, "shared.start_gap", "must be in [0, 100] inches")
+    for k, point in enumerate(sh.starts):
+        _check(
+            len(point) == 2 and all(math.isfinite(v) for v in point),
+            src,
+            f"shared.starts[{k}]",
+            f"must be a point [x, y] of finite inches, got {point!r}",
+        )
+    for k, name in enumerate(sh.goals):
+        _check(bool(name), src, f"shared.goals[{k}]", "must be a goal name")
 
 
 #: Upper bounds of values that would otherwise make a run endless or huge:

@@ -3,7 +3,8 @@
 The base install (``pip install koolio-pymunk``) trains, evaluates, exports and sweeps.
 Drawing needs the ``view`` extra (``pip install 'koolio-pymunk[view]'``): pygame-ce for
 the window, ``env.render()`` and the arena editor, pygame-gui for their widgets,
-matplotlib for ``koolio-pm plot`` and a sweep's ``curves.png``.
+matplotlib for ``koolio-pm plot`` and a sweep's ``curves.png``. PettingZoo's API for robots
+sharing an arena (``koolio_pymunk.parallel_env``) needs the ``multi`` extra.
 
 Code that needs the extra imports it inside :func:`view_extra`; a missing module of the
 extra becomes :class:`MissingExtra`, which is both a
@@ -39,14 +40,24 @@ VIEW_INSTALL = "pip install 'koolio-pymunk[view]'"
 """The command that installs the drawing extra."""
 VIEW_MODULES = {"pygame": "pygame-ce", "pygame_gui": "pygame-gui", "matplotlib": "matplotlib"}
 """Top-level modules of the ``view`` extra and the distributions that provide them."""
+MULTI_INSTALL = "pip install 'koolio-pymunk[multi]'"
+"""The command that installs the multi-agent extra (PettingZoo)."""
+MULTI_MODULES = {"pettingzoo": "pettingzoo"}
+"""Top-level modules of the ``multi`` extra and the distributions that provide them."""
 
 
 class MissingExtra(KoolioError, DependencyNotInstalled):
     """A module of an optional extra is not installed; the message names the extra."""
 
 
-def missing_extra(exc: ImportError, what: str) -> MissingExtra | None:
-    """The :class:`MissingExtra` for ``exc`` if it is a missing ``view`` module, else None.
+def missing_extra(
+    exc: ImportError,
+    what: str,
+    modules: dict[str, str] = VIEW_MODULES,
+    install: str = VIEW_INSTALL,
+) -> MissingExtra | None:
+    """The :class:`MissingExtra` for ``exc`` if it is a missing module of the extra
+    (``modules``, installed by ``install``: the ``view`` extra by default), else None.
 
     Only the extra's own top-level modules count: a module missing *inside* an installed
     package is a broken install, not a missing extra, and stays a traceback.
@@ -54,18 +65,26 @@ def missing_extra(exc: ImportError, what: str) -> MissingExtra | None:
     if not isinstance(exc, ModuleNotFoundError) or exc.name is None:
         return None
     top = exc.name.partition(".")[0]
-    if exc.name != top or top not in VIEW_MODULES:
+    if exc.name != top or top not in modules:
         return None
-    return MissingExtra(f"{what}: {VIEW_MODULES[top]} is not installed: {VIEW_INSTALL}")
+    return MissingExtra(f"{what}: {modules[top]} is not installed: {install}")
 
 
 @contextlib.contextmanager
-def view_extra(what: str) -> Iterator[None]:
-    """Turn a missing ``view`` module imported in the block into :class:`MissingExtra`."""
+def view_extra(
+    what: str, modules: dict[str, str] = VIEW_MODULES, install: str = VIEW_INSTALL
+) -> Iterator[None]:
+    """Turn a missing ``view`` module imported in the block into :class:`MissingExtra`
+    (``modules`` and ``install``: another extra's)."""
     try:
         yield
     except ModuleNotFoundError as exc:
-        missing = missing_extra(exc, what)
+        missing = missing_extra(exc, what, modules, install)
         if missing is None:
             raise
         raise missing from None
+
+
+def multi_extra(what: str) -> contextlib.AbstractContextManager[None]:
+    """:func:`view_extra` for the ``multi`` extra (PettingZoo)."""
+    return view_extra(what, MULTI_MODULES, MULTI_INSTALL)

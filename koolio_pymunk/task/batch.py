@@ -118,6 +118,16 @@ class EnvBatch:
         (:class:`~koolio_pymunk.sensing.reading_kernel.ReadingArrays`)."""
         self.reading_args = (self.readings.shared, self.readings.rows)
         """:func:`~koolio_pymunk.sensing.reading_kernel.robot_group`'s arguments."""
+        self.shared = first.share is not None
+        """The robots share one arena (:mod:`.shared_arena`): bodies to each other."""
+        world = first.world
+        robots = world.xy if self.shared else np.zeros((0, 2))
+        present = world.present if self.shared else np.zeros(0, np.bool_)
+        self.among = (robots, present, self.readings.robot_rows)
+        """:func:`~koolio_pymunk.sensing.reading_kernel.robot_others`' arguments after the
+        robot: the shared world's centres and presence flags (its own arrays, which the
+        compiled steps keep current: Python's start spots read them), and the rows the
+        readings write the robots hit into. Robots alone: empty centres."""
         for r, env in enumerate(envs):
             if hasattr(env, "state_key"):  # an env reset before: its state as it stands
                 self.load(r)
@@ -144,10 +154,19 @@ class EnvBatch:
         self.load(r)
         return key
 
+    def enter(self, r: int) -> bool:
+        """A waiting robot of a shared arena tries to enter it
+        (:meth:`KoolioEnv.enter <koolio_pymunk.task.env.KoolioEnv.enter>`); when it did,
+        its state is taken into the arrays. Returns whether it entered."""
+        if not self.envs[r].enter():
+            return False
+        self.load(r)
+        return True
+
     def load(self, r: int) -> None:
         """Take ``envs[r]``'s state (after a reset or Python steps) into the arrays."""
         env = self.envs[r]
-        x, y, h = env.world.pose(0)
+        x, y, h = env.world.pose(env.robot)
         misread = bool(env.sensors.realism.misread)
         self.ints[r] = (env.state_key, env.steps, env.bumps, env.has_been_rescued, env.rescued,
                         env._check_rescue, misread)  # fmt: skip

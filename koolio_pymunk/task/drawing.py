@@ -251,6 +251,38 @@ def draw_robot(
     pygame.draw.line(surface, HEADING, c, tip, width=max(2, camera.scale(radius / 5.0)))
 
 
+#: The colours of robots sharing an arena, by index (robot ``k`` takes ``k % 8``): the
+#: other robots are drawn in these with their number; the selected robot keeps the
+#: paper's state colours.
+ROBOT_PALETTE: tuple[Color, ...] = (
+    (31, 119, 180),
+    (255, 127, 14),
+    (44, 160, 44),
+    (148, 103, 189),
+    (140, 86, 75),
+    (23, 190, 207),
+    (188, 189, 34),
+    (127, 127, 127),
+)
+
+
+def draw_numbered_robot(
+    surface: pygame.Surface,
+    camera: Camera,
+    pose: tuple[float, float, float],
+    radius: float,
+    number: int,
+    colour: Color | None = None,
+) -> None:
+    """Robot ``number`` of a shared arena: :func:`draw_robot` in its palette colour (or
+    ``colour``), its number on it."""
+    draw_robot(surface, camera, pose, radius, colour or ROBOT_PALETTE[number % len(ROBOT_PALETTE)])
+    size = max(10, camera.scale(radius * 1.2))
+    label = text(str(number), size, (255, 255, 255))
+    c = camera.to_screen(pose[:2])
+    surface.blit(label, label.get_rect(center=c))
+
+
 def dashed_line(
     surface: pygame.Surface,
     colour: Color,

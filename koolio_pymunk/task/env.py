@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import gymnasium as gym
 import numpy as np
@@ -24,6 +24,9 @@ from .action_rules import barred
 from .end_zones import EndZones
 from .rescue import rescue_robot, wants_rescue
 from .rules import TERMS, Judgement, judge
+
+if TYPE_CHECKING:
+    from .shared_arena import SharedArena
 
 #: The event of a Stop in front of a misread plate (realism ``camera.misread``): the robot
 #: believes it delivered (the goal reward, the episode ends) at another door.
@@ -167,6 +170,8 @@ class KoolioEnv(gym.Env):
         world: str | Path | None = None,
         observe_goal: bool = False,
         overrides: dict[str, Any] | None = None,
+        share: SharedArena | None = None,
+        robot: int = 0,
     ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             modes = ", ".join(repr(m) for m in self.metadata["render_modes"])
@@ -196,7 +201,14 @@ class KoolioEnv(gym.Env):
         self.observe_goal = bool(observe_goal)
         """The observation ends with :attr:`goal_index` (``observe_goal=True``)."""
         self.world_arena = self.arena.to_world()
-        self.world = World.from_arena(self.arena, radius)
+        self.share = share
+        """The arena this robot shares with others (None: it is alone in its own)."""
+        self.robot = robot
+        """This robot's index in :attr:`world` (0 unless it shares the arena)."""
+        self.world = share.world if share is not None else World.from_arena(self.arena, radius)
+        self.waiting = False
+        """A shared arena's robot whose episode began while every start spot was covered:
+        it is outside the arena until :meth:`enter` finds one free."""
         self.zones = EndZones(self.world_arena, radius)
         realism = self.config.realism
         self.realism: RealismConfig = realism
@@ -212,6 +224,7 @@ class KoolioEnv(gym.Env):
             [m.at for m in self.world_arena.end_of_world],
             realism=realism,
             plates=self._other_plates(),
+            robot=robot,
         )
         fields = state_fields(self.config.sensors)
         self.layout = KeywordLayout(tuple(fields))
@@ -356,19 +369,40 @@ class KoolioEnv(gym.Env):
             goal = names[int(rng.integers(len(names)))]
         if goal is not None:
             self.set_goal(goal)
+        self._reset_counters()
+        self.memory.reset()
+        self.enter(options.get("heading"))
+        return self.state_key
+
+    def enter(self, heading: float | None = None) -> bool:
+        """Put the robot at its start with ``heading`` (radians; None: the arena's, or a
+        random one) and read its sensors: the start point, or in a shared arena a free
+        start spot drawn first (:class:`~koolio_pymunk.world.start_area.StartArea`).
+        When every spot is covered the robot stays out (:attr:`waiting`, no draw made)
+        and its episode loop asks again at its next turn. Returns whether it entered."""
+        rng = self.np_random
         start = self.world_arena.start
-        heading = options.get("heading")
+        at: Point | None = start.at
+        if self.share is not None:
+            at = self.share.areas[self.robot].draw(self.robot, rng)
+            self.waiting = at is None
+            if at is None:
+                return False
         if heading is None:
             heading = (
                 math.radians(start.heading_deg)
                 if start.heading_deg is not None
                 else float(rng.uniform(0.0, 2.0 * math.pi))
             )
-        self.world.place(0, start.at, float(heading))
-        self._reset_counters()
-        self.memory.reset()
+        self.world.place(self.robot, at, float(heading))
         self._sense()
-        return self.state_key
+        return True
+
+    def leave(self) -> None:
+        """A shared arena's robot whose episode ended leaves the arena (no obstacle, no
+        sensor target) until its next episode enters it; alone, nothing happens."""
+        if self.share is not None:
+            self.world.park(self.robot)
 
     def transition(self, action: int) -> tuple[int, float, bool, bool]:
         """One whole step: :meth:`simulate`, then :meth:`rescue_check` (the Gymnasium
@@ -391,12 +425,15 @@ class KoolioEnv(gym.Env):
         check: returns ``(next_key, reward, terminated, truncated)``."""
         prev_key = self.state_key
         if self.motion is None:
-            self.world.act((action,), self.move_distance, self.turn_arc)
+            self.world.act_robot(self.robot, action, self.move_distance, self.turn_arc)
         else:
             self._act_with_errors(action)
         bump, goal_close = self._sense(action)
         x, y, _ = self._pose
-        j = judge(action, goal_close, self.zones.contains(x, y), bump, self.config.rewards)
+        robot_bump = bump and self.share is not None and self.sensors.robot_bump(self.readings)
+        j = judge(
+            action, goal_close, self.zones.contains(x, y), bump, self.config.rewards, robot_bump
+        )
         if j.event == "goal" and self.sensors.goal_misread():
             j = Judgement(WRONG_DOOR, j.reward, True, j.terms)
         self.steps += 1
@@ -433,8 +470,11 @@ class KoolioEnv(gym.Env):
         :mod:`koolio_pymunk.learning.engine`): the robot's pose, the state key,
         ``(steps, bumps, episode_reward)`` and ``(has_been_rescued, rescued)``. The
         last reading is then read from the sensor kernel's buffers."""
-        self.world.place(0, pose[:2], pose[2])
-        self._pose = self.world.pose(0)
+        parked = self.share is not None and not self.world.present[self.robot]
+        self.world.place(self.robot, pose[:2], pose[2])
+        if parked:  # its episode ended: it stays out of the arena
+            self.world.park(self.robot)
+        self._pose = self.world.pose(self.robot)
         self.state_key = state_key
         self.steps, self.bumps, self.episode_reward = counters
         self.has_been_rescued, self.rescued = rescued
@@ -478,15 +518,15 @@ class KoolioEnv(gym.Env):
         assert motion is not None
         if action in (Action.FORWARD, Action.REVERSE):
             sign = 1.0 if action == Action.FORWARD else -1.0
-            self.world.drive(0, *motion.move(sign, self.move_distance, rng))
+            self.world.drive(self.robot, *motion.move(sign, self.move_distance, rng))
         elif action == Action.ROTATE_LEFT:
-            self.world.drive(0, 0.0, motion.turn(self.turn_arc, rng))
+            self.world.drive(self.robot, 0.0, motion.turn(self.turn_arc, rng))
         elif action == Action.ROTATE_RIGHT:
-            self.world.drive(0, 0.0, -motion.turn(self.turn_arc, rng))
+            self.world.drive(self.robot, 0.0, -motion.turn(self.turn_arc, rng))
 
     def _rescue(self) -> None:
         self._before_rescue = self.codes  # ``info["observation_before_rescue"]``
-        rescue_robot(self.world, 0, self.config.rescue, self.move_distance, self.np_random)
+        rescue_robot(self.world, self.robot, self.config.rescue, self.move_distance, self.np_random)
         self._sense()
         self.rescued = True
         self.has_been_rescued = True
@@ -505,7 +545,7 @@ class KoolioEnv(gym.Env):
     def _sense(self, action: int | None = None) -> tuple[bool, bool]:
         """Read the sensors after ``action`` (None: a reset or a rescue), update the memory;
         sets ``state_key`` and returns ``(bump, goal_close)``."""
-        self._pose = self.world.pose(0)
+        self._pose = self.world.pose(self.robot)
         key, bump, goal_close = self.sensors.sense(self._pose, self.np_random)
         if self.memory.on:
             self.memory.update(*self.sensors.sightings(), action)
@@ -537,7 +577,7 @@ class KoolioEnv(gym.Env):
         j = self.judgement
         rescued = self.rescued and self._before_rescue is not None
         return {
-            "pose": self.world.pose(0),
+            "pose": self.world.pose(self.robot),
             "sonar": r.sonar.tolist(),
             "goal_cam": r.goal.tolist(),
             "eow_cam": r.eow.tolist(),

@@ -24,6 +24,7 @@ from .drawing import (
     ROBOT_NORMAL,
     ROBOT_STATES,
     draw_arena,
+    draw_numbered_robot,
     draw_robot,
     draw_sensors,
     robot_state,
@@ -64,14 +65,23 @@ def draw_env(
     (layer.draw if layer is not None else draw_arena)(surface, env.world_arena, camera, **kw)
     clip = surface.get_clip()
     surface.set_clip(pygame.Rect(camera.viewport))
-    pose = env.world.pose(0)
+    radius = env.config.robot.radius
+    world, me = env.world, env.robot
+    if env.share is not None:  # the other robots of a shared arena, in their colours
+        for k in range(world.n_robots):
+            if k != me and world.present[k]:
+                draw_numbered_robot(surface, camera, world.pose(k), radius, k)
+    pose = world.pose(me)
     if show_sensors:
-        if lines:
+        if lines and (env.share is None or world.present[me]):
             draw_sensors(surface, camera, pose, env.sensors, env.readings)
         colour = robot_colour(env)
     else:
         colour = ROBOT_NORMAL
-    draw_robot(surface, camera, pose, env.config.robot.radius, colour)
+    if env.share is None:
+        draw_robot(surface, camera, pose, radius, colour)
+    elif world.present[me]:
+        draw_numbered_robot(surface, camera, pose, radius, me, colour)
     surface.set_clip(clip)
 
 

@@ -38,13 +38,13 @@ import numpy as np
 
 from ..sensing.inline_twins import inline_twin
 from ..sensing.memory_kernel import remember, remember_inline
-from ..sensing.reading_kernel import sense_reading
+from ..sensing.reading_kernel import robot_bump, sense_reading, sense_reading_among
 from ..store.config import Config, RewardConfig
 from ..store.kernel_cache import ensure_fresh
 from ..world.geometry import EPS
 from ..world.physics import TWO_PI, Action
 from ..world.segment_query import hypot
-from ..world.swept_move import act, sweep
+from ..world.swept_move import act, act_among, sweep, sweep_among
 from .end_zones import EndZones
 from .rules import ACTION_TERMS, TERMINAL_EVENTS, TERMS
 
@@ -58,6 +58,9 @@ ACTION_EVENT = np.array([TERMS.index(ACTION_TERMS[a]) for a in Action], dtype=np
 #: The codes of the rules that end an episode (goal and end of world come first).
 N_TERMINAL = len(TERMINAL_EVENTS)
 assert EVENTS[:N_TERMINAL] == TERMINAL_EVENTS and EVENTS[N_TERMINAL] == "bump"
+#: Event code of a Bump read from another robot (robots sharing an arena); it comes after
+#: the end of world and before the wall's Bump in the rules' order.
+ROBOT_BUMP = TERMS.index("robot_bump")
 #: Outcome codes beyond :data:`EVENTS`' indices: a Stop at a misread plate (it ends the
 #: episode with the goal's reward), the step cap; and an episode still running.
 WRONG_DOOR_CODE, TRUNCATED_CODE, RUNNING = len(EVENTS), len(EVENTS) + 1, -1
@@ -73,7 +76,7 @@ N_FLOATS = 4
 
 def reward_array(rewards: RewardConfig) -> np.ndarray:
     """The reward of each event code (:data:`EVENTS`)."""
-    return np.array([float(getattr(rewards, event)) for event in EVENTS], dtype=np.float64)
+    return np.array([rewards.value(event) for event in EVENTS], dtype=np.float64)
 
 
 def zone_arrays(zones: EndZones) -> tuple:
@@ -143,47 +146,73 @@ def in_zone(
 
 
 @numba.njit(cache=True)
-def judge_code(action: int, close: bool, x: float, y: float, bump: bool, zones: tuple) -> int:
+def judge_code(
+    action: int, close: bool, x: float, y: float, bump: bool, zones: tuple, robot_hit: bool
+) -> int:
     """``rules.judge``'s event code (:data:`EVENTS`) of a step: goal (Stop with the goal
-    close) > end of world > bump > the action's own."""
+    close) > end of world > a Bump read from a robot (``robot_hit``) > bump > the
+    action's own."""
     discs, disc_radius, points, starts, boxes = zones
     if action == 0 and close:
         return 0
     if in_zone(x, y, discs, disc_radius, points, starts, boxes):
         return 1
+    if robot_hit:
+        return ROBOT_BUMP
     if bump:
         return 2
     return ACTION_EVENT[action]
 
 
 @numba.njit(cache=True)
-def rescue_moves(x: float, y: float, h: float, rng, walls: np.ndarray, distance: float,
-                 radius: float, max_backup: int) -> tuple[float, float, float]:  # fmt: skip
+def rescue_moves(
+    x: float, y: float, h: float, rng, walls: np.ndarray, distance: float, radius: float,
+    max_backup: int, others: tuple,
+) -> tuple[float, float, float]:  # fmt: skip
     """``rescue.rescue_robot``'s moves from ``(x, y, h)``: a random number of Reverse
-    moves (each a :func:`~koolio_pymunk.world.swept_move.sweep` against ``walls``), then a
-    random heading; the draws from ``rng``. Returns the new pose."""
+    moves (each a :func:`~koolio_pymunk.world.swept_move.sweep` against ``walls``, or in a
+    shared arena :func:`~koolio_pymunk.world.swept_move.sweep_among` the other robots of
+    ``others``), then a random heading; the draws from ``rng``. Returns the new pose."""
+    robots, present, me = others[0], others[1], others[2]
     backups = rng.integers(0, max_backup + 1)
     for _ in range(backups):
-        x, y = sweep(walls, x, y, -distance * math.cos(h), -distance * math.sin(h), radius)
+        dx, dy = -distance * math.cos(h), -distance * math.sin(h)
+        if robots.shape[0] > 0:
+            x, y = sweep_among(walls, robots, present, me, x, y, dx, dy, radius)
+        else:
+            x, y = sweep(walls, x, y, dx, dy, radius)
     return x, y, rng.uniform(0.0, TWO_PI) % TWO_PI
 
 
 @numba.njit(cache=True)
 def simulate(
     r: int, action: int, rng, sense: tuple, world: tuple, motion: np.ndarray, task: tuple,
-    memory: tuple, ints: np.ndarray, floats: np.ndarray, mem: np.ndarray,
+    memory: tuple, ints: np.ndarray, floats: np.ndarray, mem: np.ndarray, others: tuple,
 ) -> tuple:  # fmt: skip
     """``KoolioEnv.simulate(action)`` for robot ``r`` (module doc), drawing from ``rng``
-    (the env's generator) with ``sense`` (the robot's reading group). Returns ``(next
-    state, outcome code, reward, terminated, truncated)``: the code is an :data:`EVENTS`
-    index, or :data:`WRONG_DOOR_CODE` for a Stop at a misread plate."""
+    (the env's generator) with ``sense`` (the robot's reading group). ``others`` is the
+    robot's group of :func:`~koolio_pymunk.sensing.reading_kernel.robot_others`: in a
+    shared arena (its ``(N, 2)`` centres not empty) the move and the reading meet the other
+    robots, the robot's new centre is written into it and a Bump read from a robot is
+    :data:`ROBOT_BUMP`. Returns ``(next state, outcome code, reward, terminated,
+    truncated)``: the code is an :data:`EVENTS` index, or :data:`WRONG_DOOR_CODE` for a
+    Stop at a misread plate."""
     rewards, zones, cap = task[0], task[1], task[6]
-    x, y, h = act(action, floats[r, F_X], floats[r, F_Y], floats[r, F_H], rng, world,
-                  motion[r])  # fmt: skip
-    nxt, bump, close = sense_reading(x, y, h, rng, sense)
+    robots, present = others[0], others[1]
+    if robots.shape[0] > 0:
+        x, y, h = act_among(action, floats[r, F_X], floats[r, F_Y], floats[r, F_H], rng, world,
+                            motion[r], robots, present, r)  # fmt: skip
+        robots[r, 0], robots[r, 1] = x, y
+        nxt, bump, close = sense_reading_among(x, y, h, rng, sense, others)
+        hit = bump and robot_bump(sense, others)
+    else:
+        x, y, h = act(action, floats[r, F_X], floats[r, F_Y], floats[r, F_H], rng, world,
+                      motion[r])  # fmt: skip
+        nxt, bump, close = sense_reading(x, y, h, rng, sense)
+        hit = False
     if len(memory[5]) > 0:
         nxt = remember(nxt, action, sense[7], memory, mem[r])
-    code = judge_code(action, close, x, y, bump, zones)
+    code = judge_code(action, close, x, y, bump, zones, hit)
     reward = rewards[code]
     terminated = code < N_TERMINAL
     if code == 0 and ints[r, I_MISREAD] and sense[5][6][0]:
@@ -202,11 +231,12 @@ def simulate(
 @numba.njit(cache=True)
 def rescue_check(
     r: int, rng, sense: tuple, world: tuple, task: tuple, memory: tuple, ints: np.ndarray,
-    floats: np.ndarray, mem: np.ndarray,
+    floats: np.ndarray, mem: np.ndarray, others: tuple,
 ) -> bool:  # fmt: skip
     """``KoolioEnv.rescue_check()`` for robot ``r``: once per :func:`simulate`, the auto
     rescue when due (``rescue.wants_rescue``: a draw only then), its moves and a new
-    reading (the memory records it without aging). Returns whether it rescued."""
+    reading (the memory records it without aging); in a shared arena (``others``, as
+    :func:`simulate`'s) it backs out of the other robots too. Returns whether it rescued."""
     due = ints[r, I_CHECK_RESCUE] == 1
     ints[r, I_CHECK_RESCUE] = 0
     auto, after, chance, max_backup = task[2], task[3], task[4], task[5]
@@ -216,9 +246,14 @@ def rescue_check(
         return False
     walls, radius, distance = world[0], world[1], world[2]
     x, y, h = rescue_moves(floats[r, F_X], floats[r, F_Y], floats[r, F_H], rng, walls,
-                           distance, radius, max_backup)  # fmt: skip
+                           distance, radius, max_backup, others)  # fmt: skip
     floats[r, F_X], floats[r, F_Y], floats[r, F_H] = x, y, h
-    state = sense_reading(x, y, h, rng, sense)[0]
+    robots = others[0]
+    if robots.shape[0] > 0:
+        robots[r, 0], robots[r, 1] = x, y
+        state = sense_reading_among(x, y, h, rng, sense, others)[0]
+    else:
+        state = sense_reading(x, y, h, rng, sense)[0]
     if len(memory[5]) > 0:
         state = remember(state, -1, sense[7], memory, mem[r])
     ints[r, I_STATE] = state

@@ -463,16 +463,21 @@ class World:
         """Perform one action per robot: rotations by ``arc`` radians, moves by ``distance``
         along the heading (Forward) or against it (Reverse), each a swept move
         (:func:`sweep`)."""
-        heading = self.heading
         for i, action in enumerate(actions):
-            if action == _ROTATE_LEFT:
-                heading[i] = (heading[i] + arc) % TWO_PI
-            elif action == _ROTATE_RIGHT:
-                heading[i] = (heading[i] - arc) % TWO_PI
-            elif action in (_FORWARD, _REVERSE):
-                d = distance if action == _FORWARD else -distance
-                h = heading[i]
-                self.shift(i, d * math.cos(h), d * math.sin(h))
+            self.act_robot(i, action, distance, arc)
+
+    def act_robot(self, i: int, action: int, distance: float, arc: float) -> None:
+        """Robot ``i``'s action alone (:meth:`act`): in a shared world the robots act one
+        after another, each against the others where they stand."""
+        heading = self.heading
+        if action == _ROTATE_LEFT:
+            heading[i] = (heading[i] + arc) % TWO_PI
+        elif action == _ROTATE_RIGHT:
+            heading[i] = (heading[i] - arc) % TWO_PI
+        elif action in (_FORWARD, _REVERSE):
+            d = distance if action == _FORWARD else -distance
+            h = heading[i]
+            self.shift(i, d * math.cos(h), d * math.sin(h))
 
     def drive(self, i: int, distance: float, turn: float) -> None:
         """Robot ``i`` drives ``distance`` inches (negative: backwards) while its heading

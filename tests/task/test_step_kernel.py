@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from koolio_pymunk.sensing.reading_kernel import robot_group
+from koolio_pymunk.sensing.reading_kernel import robot_group, robot_others
 from koolio_pymunk.store.config import RewardConfig, load_config
 from koolio_pymunk.task.batch import EnvBatch
 from koolio_pymunk.task.end_zones import EndZones
@@ -54,14 +54,23 @@ def test_in_zone_matches_end_zones_contains(name) -> None:
 @pytest.mark.parametrize("goal_close", [False, True])
 @pytest.mark.parametrize("eow", [False, True])
 @pytest.mark.parametrize("bump", [False, True])
-def test_judge_code_is_the_rules_priority(goal_close: bool, eow: bool, bump: bool) -> None:
-    rw = RewardConfig(stop=-2.5, reverse=-3.5, turn=-1.25, forward=-0.75)
+@pytest.mark.parametrize("robot_hit", [False, True])
+def test_judge_code_is_the_rules_priority(goal_close, eow, bump, robot_hit) -> None:
+    rw = RewardConfig(stop=-2.5, reverse=-3.5, turn=-1.25, forward=-0.75, robot_bump=-7.0)
     zones = zone_arrays(EndZones(load_arena("room").to_world(), R))
     x, y = (264.0, 96.0) if eow else (100.0, 100.0)  # the room's exit stub, or not
+    robot_hit = robot_hit and bump  # a Bump read from a robot is a Bump
     for action in range(5):
-        j = judge(action, goal_close, eow, bump, rw)
-        code = judge_code(action, goal_close, x, y, bump, zones)
+        j = judge(action, goal_close, eow, bump, rw, robot_hit)
+        code = judge_code(action, goal_close, x, y, bump, zones, robot_hit)
         assert EVENTS[code] == j.event and reward_array(rw)[code] == j.reward
+        assert (j.event == "robot_bump") == (robot_hit and not eow and not (goal_close and
+                                                                          action == 0))  # fmt: skip
+
+
+def test_a_robot_bump_is_worth_the_wall_bump_unless_set() -> None:
+    assert reward_array(RewardConfig(bump=-3.0))[EVENTS.index("robot_bump")] == -3.0
+    assert reward_array(RewardConfig(robot_bump=-20.0))[EVENTS.index("robot_bump")] == -20.0
 
 
 @pytest.mark.parametrize("arena_name", ["obstacles", "room", "hallway"])
@@ -114,7 +123,8 @@ def test_simulate_and_rescue_check_are_the_env_s(world) -> None:
         nxt, reward, term, trunc = ref.simulate(a)
         got = simulate(0, a, batch.generators.items[0],
                        robot_group(0, *batch.reading_args), batch.world, batch.motion,
-                       batch.task, batch.memory, batch.ints, batch.floats, batch.mem)  # fmt: skip
+                       batch.task, batch.memory, batch.ints, batch.floats, batch.mem,
+                       robot_others(0, *batch.among))  # fmt: skip
         assert (got[0], [*EVENTS, "wrong_door"][got[1]], got[2], got[3], got[4]) == (
             nxt,
             ref.judgement.event,
@@ -125,7 +135,8 @@ def test_simulate_and_rescue_check_are_the_env_s(world) -> None:
         rescued = ref.rescue_check()
         got_rescue = rescue_check(0, batch.generators.items[0],
                                   robot_group(0, *batch.reading_args), batch.world, batch.task,
-                                  batch.memory, batch.ints, batch.floats, batch.mem)  # fmt: skip
+                                  batch.memory, batch.ints, batch.floats, batch.mem,
+                                  robot_others(0, *batch.among))  # fmt: skip
         assert rescued == got_rescue == bool(batch.ints[0, I_RESCUED])
         rescues += rescued
         f = batch.floats[0]
