@@ -263,20 +263,25 @@ def many(
     config: str | None = None,
     world: str | None = None,
     profiler: cProfile.Profile | None = None,
+    shared: bool = False,
 ) -> dict:
     """``koolio-pm train --robots N`` end to end (the table saved every N episodes, the
-    log): robot-steps per second; ``profiler`` runs during the timed run."""
+    log): robot-steps per second; ``profiler`` runs during the timed run; ``shared``: the
+    robots share one hallway (``--shared-arena``, start spots within 200 in)."""
     from koolio_pymunk.learning.qtable import QTableStore
     from koolio_pymunk.learning.training import train
     from koolio_pymunk.store.config import load_config
     from koolio_pymunk.task.env import KoolioEnv
 
-    def env():
-        return KoolioEnv("hallway", config=load_config(config, world=world))
+    over = {"shared": {"start_spread": 200}} if shared else None
 
-    tag = f"many-{robots}-{episodes}-{config}-{world}-{profiler is not None}".replace("/", "_")
+    def env():
+        return KoolioEnv("hallway", config=load_config(config, world=world, overrides=over))
+
+    tag = f"many-{robots}-{episodes}-{config}-{world}-{profiler is not None}-{shared}"
+    tag = tag.replace("/", "_")
     warm = QTableStore(folder / f"{tag}-warm.qtable")
-    train(env(), warm, 2, 0, None, report=None, robots=2)  # compile / load the kernels
+    train(env(), warm, 2, 0, None, report=None, robots=2, shared_arena=shared)  # compile
     first, store = env(), QTableStore(folder / f"{tag}.qtable")
     if profiler is not None:
         profiler.enable()
@@ -289,6 +294,7 @@ def many(
             folder / f"{tag}.csv",
             report=None,
             robots=robots,
+            shared_arena=shared,
         )
     if profiler is not None:
         profiler.disable()
@@ -1283,6 +1289,19 @@ def section_step_costs(b: Bench) -> None:
 def section_shared_arena(b: Bench) -> None:
     b.report["shared_arena"] = shared_costs(b.n(10_000, 2_000))
     print_shared(b.report["shared_arena"])
+    episodes = b.n(3_000, 300)
+    alone = many(8, episodes, b.folder)
+    shared = many(8, episodes, b.folder, shared=True)
+    b.report["shared_arena"]["train_8_alone"] = alone
+    b.report["shared_arena"]["train_8_shared"] = shared
+    print(table_line("train --robots 8 (each alone), default learner", alone))
+    print(
+        table_line(
+            "train --robots 8 --shared-arena (one hallway)",
+            shared,
+            f"  {ratio(shared, alone)}x alone (target >= 150,000 robot-steps/s)",
+        )
+    )
 
 
 def section_competence(b: Bench) -> None:

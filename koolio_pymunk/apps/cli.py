@@ -837,7 +837,10 @@ def cmd_eval(args: argparse.Namespace) -> int:
             f"{r.mean_bumps:>11.1f} {r.mean_reward:>12.1f}"
         )
         if r.robot_goal_rates is not None:
-            rates = ", ".join(f"{k} {v:.1%}" for k, v in enumerate(r.robot_goal_rates))
+            rates = ", ".join(
+                f"robot {k} (goal {g}) {v:.1%}"
+                for k, (g, v) in enumerate(zip(r.robot_goals or [], r.robot_goal_rates))
+            )
             print(f"  {'':>6} by robot in the shared arena: {rates}")
     if goal_all:
         mean = sum(r.goal_rate for r in results) / len(results)

@@ -236,7 +236,8 @@ def policy_document(
             "epsilon": cfg.learner.epsilon.at(max(0, eps_episode)),
         }
         | _algorithm(cfg),
-        "rewards": {k: float(v) for k, v in vars(cfg.rewards).items()},
+        # the robot's events (a robot alone meets no other: no ``robot_bump``)
+        "rewards": {k: cfg.rewards.value(k) for k in rt.EVENTS},
         "q_init": float(table.q_init),
         "episodes": episodes,
     }

@@ -44,6 +44,7 @@ dropped (the run stops at once) and runs again on resume.
 from __future__ import annotations
 
 import csv
+import dataclasses
 import io
 import math
 import time
@@ -104,6 +105,9 @@ class EvalResult:
     """Robots sharing an arena (``shared_arena``): each robot's goal rate over the
     episodes it played (None: the robots were alone, and which robot played an episode
     does not matter)."""
+    robot_goals: list[str] | None = None
+    """Robots sharing an arena: each robot's goal (``shared.goals`` may give each its own;
+    :attr:`goal` is robot 0's)."""
 
     def as_dict(self) -> dict[str, Any]:
         """The figures by name (``koolio-pm eval --json``)."""
@@ -195,6 +199,9 @@ def evaluate(
         mean_reward=float(np.mean(rewards)) if rewards else 0.0,
         goal="random" if env.random_goal and not goal else env.goal_name,
         robot_goal_rates=_robot_goal_rates(done, players, n) if shared_arena else None,
+        robot_goals=[("random" if e.random_goal else e.goal_name) for e in loop.envs]
+        if shared_arena
+        else None,
     )
 
 
@@ -353,6 +360,11 @@ class PeriodicCheck:
         """The kept best table's ``best`` record (None: no best yet)."""
         self.last = 0
         """The ``episode`` of the last row of the evaluations file (0: none)."""
+        self.shared_robots = 0
+        """Robots sharing the arena in the training run (0: none): each check then plays
+        with that many robots in one arena, and a check's goal rate is its worst robot's
+        (every robot must deliver; the kept best table is the one whose worst robot did
+        best)."""
         self._env: KoolioEnv | None = None
 
     @classmethod
@@ -449,10 +461,14 @@ class PeriodicCheck:
         started = time.perf_counter()
         if self._env is None:  # the training robots' envs are busy: a robot of its own
             self._env = env.sibling()
+        n = self.shared_robots
         try:
-            result = evaluate(self._env, table, self.episodes, self.seed, stop=stop)
+            result = evaluate(self._env, table, self.episodes, self.seed, stop=stop,
+                              robots=max(1, n), shared_arena=n > 0)  # fmt: skip
         except EvaluationStopped:
             return None
+        if result.robot_goal_rates:  # the worst robot's rate
+            result = dataclasses.replace(result, goal_rate=min(result.robot_goal_rates))
         c = Check(episode, result, self.seed, time.perf_counter() - started)
         kept = self.kept
         if kept is None or c.score > score(kept["goal_rate"], kept["mean_return"]):

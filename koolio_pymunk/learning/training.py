@@ -427,6 +427,7 @@ def train(
     checker = None
     if eval_every:
         checker = PeriodicCheck.open(run, store, log_path, eval_every, eval_episodes, seed)
+        checker.shared_robots = n if shared_arena else 0
     try:
         files = RunFiles.open(run, store, log_path, "koolio-pm train", seed)
     except BaseException:

@@ -371,7 +371,11 @@ class KoolioEnv(gym.Env):
             self.set_goal(goal)
         self._reset_counters()
         self.memory.reset()
-        self.enter(options.get("heading"))
+        if not self.enter(options.get("heading")) and not hasattr(self, "state_key"):
+            # Never read yet: a reading where it waits, with draws of a generator of its
+            # own (the robot's stream is untouched), so that the observation exists.
+            self._pose = self.world.pose(self.robot)
+            self.state_key = self.sensors.sense(self._pose, np.random.default_rng(0))[0]
         return self.state_key
 
     def enter(self, heading: float | None = None) -> bool:
