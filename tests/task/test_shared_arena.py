@@ -3,8 +3,8 @@ twin, PettingZoo's API, and a fuzz of 8 robots per arena."""
 
 from __future__ import annotations
 
+import importlib.util
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -17,8 +17,11 @@ from koolio_pymunk.task.shared_arena import SharedArena
 from koolio_pymunk.world.physics import COLLISION_SLOP, World
 from koolio_pymunk.world.start_area import StartArea
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tools"))
-import agreement  # noqa: E402
+_spec = importlib.util.spec_from_file_location(
+    "agreement", Path(__file__).resolve().parents[2] / "tools" / "agreement.py"
+)
+agreement = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(agreement)
 
 BOX = [((0, 0), (200, 0)), ((200, 0), (200, 100)), ((200, 100), (0, 100)), ((0, 100), (0, 0))]
 
@@ -134,7 +137,7 @@ CROWDED = {"shared": {"start_spread": 28}}
             {"rescue": {"max_steps_before_rescue": 3, "rescue_chance": 0.5}},
             3,
             300,
-        ),  # fmt: skip
+        ),
         ("hallway", None, {"learner": {"algorithm": "q", "no_undo": False}}, 5, 300),
         ("obstacles", "koolio-real-dr", {}, 3, 300),
         ("hallway", None, CROWDED, 3, 40),
@@ -206,11 +209,11 @@ def test_parallel_env_refuses_bad_actions_before_moving() -> None:
 
 def test_parallel_env_agents_leave_when_their_episode_ends() -> None:
     env = koolio_pymunk.parallel_env(robots=3, arena="room", max_steps=30)
-    obs, _ = env.reset(seed=0)
+    env.reset(seed=0)
     rng = np.random.default_rng(0)
     gone: set[str] = set()
     while env.agents:
-        obs, rew, term, trunc, info = env.step({a: int(rng.integers(5)) for a in env.agents})
+        _, _, term, trunc, info = env.step({a: int(rng.integers(5)) for a in env.agents})
         ended = {a for a in term if term[a] or trunc[a]}
         for a in ended:
             assert not env.envs[info[a]["robot"]].world.present[info[a]["robot"]]
@@ -286,7 +289,7 @@ def test_fuzz_eight_robots_never_leave_overlap_or_stick(arena) -> None:
                 "tight.yaml",
             ],
             ["room.yaml", "3 robots start from", "holds 1"],
-        ),  # fmt: skip
+        ),
     ],
 )
 def test_bad_shared_arena_runs_are_one_line_before_any_file(here, capsys, argv, words) -> None:
