@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from move_agreement import generated_arenas
 
 import koolio_pymunk
 from koolio_pymunk.store.config import load_config
@@ -233,7 +234,9 @@ def test_parallel_env_draws_every_robot() -> None:
     assert ROBOT_PALETTE[1] in colours and ROBOT_PALETTE[2] in colours
 
 
-ARENAS = ["hallway", "room", "obstacles"]
+#: The shipped arenas, then four held-out style generated ones (jittered and turned
+#: shipped arenas, star-shaped rooms with obstacles: ``tools/move_agreement.py``).
+ARENAS = ["hallway", "room", "obstacles", 0, 1, 2, 3]
 
 
 @pytest.mark.parametrize("arena", ARENAS)
@@ -241,6 +244,8 @@ def test_fuzz_eight_robots_never_leave_overlap_or_stick(arena) -> None:
     """8 robots, 10,000 robot-steps of random actions (compiled sensors, rescues on): no
     robot leaves the arena's walls, no two in the arena overlap by more than the slop, and
     none stays in one place for good (every robot moves in each stretch of 500 ticks)."""
+    if isinstance(arena, int):
+        arena = generated_arenas(4, seed=11)[arena]
     cfg = load_config(overrides={"shared": {"start_spread": 300}})
     envs = SharedArena.envs(8, arena, cfg)
     rng = np.random.default_rng(5)
