@@ -16,6 +16,14 @@ buttons, check boxes and a slider), or, with ``--panel-window`` or key P, the sa
 in a window of its own (the paper's future-work floating control panel). Every control
 has a keyboard shortcut (F1 shows them).
 
+Robots sharing the hallway (``--robots N --shared-arena``): N robots learn into one table
+(or are watched, ``--greedy``) in one arena, stepping in tick order as ``train --robots N
+--shared-arena`` does (:class:`~koolio_pymunk.apps.viewer.session.SharedSession`); each
+is drawn in its colour with its number. One of them is *selected* (robot 0 at first;
+Tab / Shift+Tab or a click on a robot selects another): its sensor lines are drawn, the
+HUD and the Stats panel show it, Follow follows it. A step is then a tick: every robot
+makes one step.
+
 Pacing: with the clock, steps run at the slider's rate (steps per second). Clockless
 runs ``episode.clockless_loop_count`` steps per tick back to back and redraws at most
 :data:`DRAW_FPS` times a second and within :data:`DRAW_BUDGET` of the wall time
@@ -72,6 +80,8 @@ HELP_LINES: list[tuple[str, str]] = [
     ("A", "Auto Rescue"),
     ("C", "Clockless"),
     ("F", "Follow the robot"),
+    ("Tab / Shift+Tab", "next / previous robot (shared arena)"),
+    ("click a robot", "select it (shared arena)"),
     ("P", "control panel: own window / docked"),
     ("] / [", "clock faster / slower"),
     ("+ / -", "zoom in / out"),
@@ -109,7 +119,7 @@ MAX_STEPS = 10**12
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """The flags of ``train`` plus the window's own."""
-    from ..cli import add_env_args, add_learning_files_args
+    from ..cli import MAX_ROBOTS, add_env_args, add_learning_files_args, add_shared_arena_arg
     from ..flags import MAX_EPISODES, file_name, float_type, int_type
 
     add_env_args(p)
@@ -121,6 +131,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "table holds; default: no limit)",
     )
     add_learning_files_args(p)
+    p.add_argument(
+        "--robots",
+        type=int_type(1, MAX_ROBOTS),
+        default=1,
+        help="robots in the window, learning into one table or watched (default 1); "
+        "several need --shared-arena (robots each in their own copy of the arena are "
+        "train's parallel data collection, nothing to watch in one window): select one with "
+        "Tab / Shift+Tab or a click, a step is then a tick (every robot one step)",
+    )
+    add_shared_arena_arg(p)
     p.add_argument(
         "--discard-unfinished",
         action="store_true",
@@ -181,6 +201,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _check_args(args: argparse.Namespace) -> tuple[int, Path] | None:
+    if args.robots > 1 and not args.shared_arena:
+        raise KoolioError(
+            f"view --robots {args.robots}: needs --shared-arena (a window shows the robots "
+            "of one arena; robots each in their own copy are train's)"
+        )
     if args.greedy and args.learn:
         raise KoolioError("--greedy, --learn: choose one (watch the table, or learn into it)")
     if args.screenshot is not None:
@@ -225,8 +250,8 @@ def run(args: argparse.Namespace) -> int:
     from ...learning.training import RunFiles
     from ...store.interrupts import deferred
     from ...task.env import KoolioEnv
-    from ..cli import announce_compile
-    from .session import Session, watched_table
+    from ..cli import announce_compile, check_shared_arena
+    from .session import Session, SharedSession, watched_table
 
     if _headless():
         if args.steps is None and args.episodes is None:
@@ -234,6 +259,7 @@ def run(args: argparse.Namespace) -> int:
         if args.paused:
             raise KoolioError("--paused: a headless window cannot be resumed")
     env = KoolioEnv(arena=args.arena, config=args.config, goal=args.goal, world=args.world)
+    check_shared_arena(args, env)
     store = QTableStore(args.qtable)
     existed = store.exists()
     greedy = args.greedy or (existed and not args.learn)
@@ -243,13 +269,15 @@ def run(args: argparse.Namespace) -> int:
     else:
         RunFiles.check(RunIdentity.of_run(env), store, args.log)
     announce_compile(env)
-    session = Session(
+    shared = {"robots": args.robots} if args.shared_arena else {}
+    session = (SharedSession if shared else Session)(
         env,
         args.qtable,
         seed=args.seed,
         episodes=args.episodes,
         log=args.log,
         greedy=greedy,
+        **shared,
     )
     print(opening_line(session, existed, asked=args.greedy))
     try:
@@ -293,12 +321,19 @@ def opening_line(session: Any, existed: bool, asked: bool = True) -> str:
     if not session.learn:
         how = "" if asked else "; --learn trains it further"
         return (
-            f"view: watching {table} ({count(session.table.meta.get('episodes', 0), 'episode')}; "
+            f"view: {robots_words(session)}watching {table} "
+            f"({count(session.table.meta.get('episodes', 0), 'episode')}; "
             f"greedy, nothing is written){how}"
         )
     log = f" (log {session.log_path})" if session.log_path else " (no log)"
     held = f"which holds {count(session.first, 'episode')}" if existed else "a new table"
-    return f"view: learning into {table}, {held}{log}"
+    return f"view: {robots_words(session)}learning into {table}, {held}{log}"
+
+
+def robots_words(session: Any) -> str:
+    """``"4 robots sharing the arena, "`` (one robot: nothing)."""
+    n = getattr(session, "n_robots", 1)
+    return f"{n} robots sharing the arena, " if n > 1 else ""
 
 
 def closing_line(session: Any) -> str:
@@ -306,8 +341,10 @@ def closing_line(session: Any) -> str:
     unchanged)."""
     from .hud import plural
 
+    n = getattr(session, "n_robots", 1)
+    steps = plural(session.total_steps, "step" if n == 1 else "tick")
     line = (
-        f"view: {plural(session.total_steps, 'step')}, "
+        f"view: {steps}{f' of {n} robots' if n > 1 else ''}, "
         f"{plural(session.stats.episodes, 'episode')} finished "
         f"({session.stats.goals} at the goal)"
     )
@@ -317,7 +354,8 @@ def closing_line(session: Any) -> str:
     folded = any(r.outcome == "interrupted" for r in session.results)
     added = f"{plural(session.stats.episodes, 'episode')} added ({total} in all)"
     if folded:
-        added += ", and the unfinished episode's updates (Exit)"
+        whose = "episode's" if n == 1 else "episodes'"
+        added += f", and the unfinished {whose} updates (Exit)"
     return f"{line}; {session.table_path}: {added}"
 
 
@@ -441,7 +479,54 @@ class ViewerApp:
     The control panel sits on the right of the window, or (``panel_window=True``, key P,
     the paper's future-work "floating control panel") in a window of its own,
     :attr:`panel_window` (a ``pygame.Window``); closing that window docks it again.
+
+    Robots sharing an arena (a :class:`~koolio_pymunk.apps.viewer.session.SharedSession`):
+    :attr:`env` is the selected robot's (:meth:`select`, Tab / Shift+Tab, a click on a
+    robot in the arena view), which the views, the HUD, Stats and Follow show.
     """
+
+    @property
+    def env(self) -> Any:
+        """The selected robot's env (the only one's, with one robot)."""
+        return self.session.env
+
+    @property
+    def envs(self) -> list[Any]:
+        """Every robot's env."""
+        return list(getattr(self.session, "envs", [self.session.env]))
+
+    @property
+    def n_robots(self) -> int:
+        return int(getattr(self.session, "n_robots", 1))
+
+    def select(self, robot: int) -> None:
+        """Show robot ``robot`` (its sensor lines, HUD, Stats; Follow follows it)."""
+        self.session.select(robot % self.n_robots)
+        if self.follow:
+            self._follow_robot()
+
+    def select_next(self, step: int = 1) -> None:
+        """The next robot (``step`` -1: the previous one), round the robots."""
+        if self.n_robots > 1:
+            self.select((self.session.selected + step) % self.n_robots)
+
+    def robot_at(self, pos: tuple[int, int]) -> int | None:
+        """The robot drawn under the screen point ``pos`` of the arena view (the nearest
+        one within a little more than its radius; None: none there, or one robot)."""
+        if self.n_robots < 2:
+            return None
+        world = self.env.world
+        x, y = self.camera.to_world(pos)
+        reach = self.env.config.robot.radius * 1.25
+        best, best_d = None, reach
+        for k in range(self.n_robots):
+            if not world.present[k]:
+                continue
+            px, py, _ = world.pose(k)
+            d = math.hypot(px - x, py - y)
+            if d <= best_d:
+                best, best_d = k, d
+        return best
 
     def __init__(
         self,
@@ -473,7 +558,6 @@ class ViewerApp:
         )
         self.headless = _headless()
         self.session = session
-        self.env = session.env
         self.size = size
         self.style = hud.style(size)
         self.config_name = config_name or "default"
@@ -637,6 +721,7 @@ class ViewerApp:
         return [
             "mode: " + ("learning" if s.learn else "greedy (read-only table)"),
             f"arena: {self.env.arena.name}   seed: {s.seed}",
+            *([f"robots: {self.n_robots}, sharing the arena"] if self.n_robots > 1 else []),
             f"world: {self.env.world_name}",  # a line of its own: a long config path
             *realism_lines(self.env.config),  # shortened to the panel's width hides nothing
             f"config: {self.config_name}",
@@ -672,7 +757,8 @@ class ViewerApp:
         """Set a toggle (``show_sensors``, ``show_hud``, ``show_stats``, ``auto_rescue``,
         ``clockless``, ``follow``) and its check box."""
         if name == "auto_rescue":
-            self.env.config.rescue.auto_rescue_toggle = bool(value)
+            for env in self.envs:
+                env.config.rescue.auto_rescue_toggle = bool(value)
         else:
             setattr(self, name, bool(value))
         box = self.checks[name]
@@ -736,8 +822,12 @@ class ViewerApp:
 
     def _follow_robot(self) -> None:
         """Centre on the robot along each axis the arena does not fit in; else centre the
-        arena along that axis (a compact arena stays put, a long one scrolls)."""
-        x, y, _ = self.env.world.pose(0)
+        arena along that axis (a compact arena stays put, a long one scrolls). A robot of a
+        shared arena that is outside it (between episodes) leaves the view where it is."""
+        env = self.env
+        if env.share is not None and not env.world.present[env.robot]:
+            return
+        x, y, _ = env.world.pose(env.robot)
         xmin, ymin, xmax, ymax = self.bounds
         _, _, vw, vh = self.camera.viewport
         zoom = self.camera.zoom
@@ -850,6 +940,8 @@ class ViewerApp:
         }
         if k == pg.K_q:
             self.exit(save=not shift)
+        elif k == pg.K_TAB:
+            self.select_next(-1 if shift else 1)
         elif k == pg.K_ESCAPE:
             self.help = False
         elif uni == "?" or (k == pg.K_SLASH and shift):
@@ -869,6 +961,9 @@ class ViewerApp:
             return
         if ev.type == pg.MOUSEBUTTONDOWN and ev.button == 1:
             if self._in(self.layout.main, ev.pos):
+                hit = self.robot_at(ev.pos)
+                if hit is not None:
+                    self.select(hit)
                 self._drag = ev.pos
             elif self.overview_cam is not None and self._in(self.layout.overview, ev.pos):
                 wx, _ = self.overview_cam.to_world(ev.pos)
@@ -886,8 +981,9 @@ class ViewerApp:
         self._last_time = now
         if not self.running or self.session.done:
             return 0
-        if self.clockless:
-            return int(self.env.config.episode.clockless_loop_count)
+        if self.clockless:  # several robots: ticks of about as many robot steps
+            count = int(self.env.config.episode.clockless_loop_count)
+            return max(1, -(-count // self.n_robots))
         if self.headless:
             return 1
         self._debt = min(self._debt + elapsed * self.speed, max(1.0, self.speed * 0.25))
@@ -974,6 +1070,10 @@ class ViewerApp:
         """Tags shown over the arena view."""
         env, s = self.env, self.session
         out = []
+        if self.n_robots > 1:
+            out.append(f"ROBOT {s.selected}")
+            if env.waiting:
+                out.append("WAITING")
         if self.auto_rescue:
             out.append("AUTO-RESCUE")
         if self.clockless:
@@ -1004,7 +1104,10 @@ class ViewerApp:
         tag_at = (lay.main[0] + st.pad, lay.main[1] + st.pad)
         drawn["tags"] = hud.draw_tags(screen, tag_at, self.tags(), st)
         if self.show_hud:
-            drawn["hud"] = hud.draw_hud(screen, pg.Rect(lay.hud), self.env, st)
+            title = "HUD: encoded readings"
+            if self.n_robots > 1:
+                title = f"HUD: robot {self.session.selected}'s encoded readings"
+            drawn["hud"] = hud.draw_hud(screen, pg.Rect(lay.hud), self.env, st, title=title)
         else:
             hud.panel(screen, pg.Rect(lay.hud), "HUD hidden [H]", st)
         if self.show_stats:

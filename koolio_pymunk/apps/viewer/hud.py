@@ -22,7 +22,7 @@ import pygame
 from ...sensing.suite import compass_code
 from ...store.config import BEARINGS
 from ...store.keyword import CAMERA_LEVELS, COMPASS_LEVELS, SONAR_LEVELS
-from ...task.drawing import Color
+from ...task.drawing import ROBOT_PALETTE, Color
 from ...task.env import KoolioEnv
 from ...world.physics import ACTION_NAMES
 from ..plotting import moving_average
@@ -71,7 +71,17 @@ TAG_COLOURS: dict[str, Color] = {
     "GREEDY": (120, 60, 150),
     "DONE": (0, 0, 0),
     "FOLLOW": (70, 120, 140),
+    "WAITING": (150, 110, 20),
 }
+
+
+def tag_colour(tag: str) -> Color:
+    """A tag's badge colour: ``ROBOT k`` (the selected robot of a shared arena) in robot
+    ``k``'s palette colour, the others from :data:`TAG_COLOURS` (grey when not there)."""
+    head, _, number = tag.partition(" ")
+    if head == "ROBOT" and number.isdigit():
+        return ROBOT_PALETTE[int(number) % len(ROBOT_PALETTE)]
+    return TAG_COLOURS.get(tag, (60, 60, 60))
 
 
 # -- sizes and text ----------------------------------------------------------------------------
@@ -312,7 +322,11 @@ def bump_text(env: KoolioEnv) -> str:
 
 
 def draw_hud(
-    surface: pygame.Surface, rect: pygame.Rect, env: KoolioEnv, st: Style = PLAIN
+    surface: pygame.Surface,
+    rect: pygame.Rect,
+    env: KoolioEnv,
+    st: Style = PLAIN,
+    title: str = "HUD: encoded readings",
 ) -> dict[str, object]:
     """Show HUD: every encoded reading by name, its level and distance; the Bump flag
     naming the sonar that bumped, and that sonar marked in its row.
@@ -323,7 +337,7 @@ def draw_hud(
     left out, so that the last action's line stays in view."""
     clip = surface.get_clip()
     surface.set_clip(rect)
-    inner = panel(surface, rect, "HUD: encoded readings", st)
+    inner = panel(surface, rect, title, st)
     cols = _hud_columns(inner.x, st)
     rows = hud_rows(env)
     below = _below_rows(st)
@@ -361,6 +375,7 @@ def draw_hud(
     surface.set_clip(clip)
     return {
         "panel": rect,
+        "title": title,
         "bump_flag": flag,
         "bump_marks": marks,
         "flag_marks": flags,
@@ -460,13 +475,22 @@ def stats_rows(session: Session, steps_per_s: float) -> list[tuple[str, str]]:
     """``(label, value)`` lines of the Stats panel; ``("", heading)`` starts a section."""
     env, st = session.env, session.stats
     trained = int(session.table.meta.get("episodes", 0))
+    n = session.n_robots
+    heading = f"This episode (#{episode_number(session)}, goal {env.goal_name})"
+    episodes = f"{st.episodes}"
+    if n > 1:  # the selected robot's episode; the run's totals, and its share of them
+        k = session.selected
+        heading = f"Robot {k}'s episode {session.robot_episodes[k]} (goal {env.goal_name})"
+        if env.waiting:
+            heading = f"Robot {k}: waiting for a free start spot"
+        episodes += f" (robot {k}: {session.robot_stats[k].episodes})"
     rows = [
-        ("", f"This episode (#{episode_number(session)}, goal {env.goal_name})"),
+        ("", heading),
         ("reward", f"{env.episode_reward:g}"),
         ("steps", f"{env.steps}"),
         ("bumps", f"{env.bumps}"),
         ("", "All episodes of this run"),
-        ("episodes", f"{st.episodes}"),
+        ("episodes", episodes),
         ("at the goal", f"{st.goals}" + ("" if not st.episodes else f" ({st.goal_rate:.0%})")),
         ("avg reward / ep", _num(st.mean(st.reward_sum))),
         ("avg steps / ep", _num(st.mean(st.steps_sum))),
@@ -475,7 +499,7 @@ def stats_rows(session: Session, steps_per_s: float) -> list[tuple[str, str]]:
         ("epsilon", f"{session.agent.epsilon:.3f}" + ("" if session.learn else " (greedy)")),
         ("Q-table", plural(len(session.table), "state")),
         ("trained", plural(trained, "episode")),
-        ("speed", f"{steps_per_s:,.0f} steps/s"),
+        ("speed", f"{steps_per_s:,.0f} {'steps' if n == 1 else 'ticks'}/s"),
     ]
     return rows
 
@@ -768,7 +792,7 @@ def draw_tags(
     for tag in tags:
         label = text(tag, st.small, (255, 255, 255), bold=True)
         box = pygame.Rect(x, y, label.get_width() + st.px(12), label.get_height() + st.px(4))
-        pygame.draw.rect(surface, TAG_COLOURS.get(tag, (60, 60, 60)), box, border_radius=4)
+        pygame.draw.rect(surface, tag_colour(tag), box, border_radius=4)
         surface.blit(label, label.get_rect(center=box.center))
         out[tag] = box
         x = box.right + st.px(6)

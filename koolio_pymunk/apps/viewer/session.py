@@ -19,6 +19,14 @@ of ``koolio-pm eval`` with the same seed (the evaluation seed stream).
 An episode that ends is saved at once, but the environment is reset lazily at the next
 step, so a viewer can still draw the final state (robot black at the goal, purple past
 the end of the world). :class:`Stats` is what the Stats panel shows.
+
+:class:`SharedSession` is the same for N robots sharing one arena (``view --robots N
+--shared-arena``): they step in tick order through
+:class:`~koolio_pymunk.learning.episodes.Robots` (the Python reference of the engine that
+``train --robots N --shared-arena`` runs) into one table, and a window run of E episodes
+writes the table and log rows of ``train --robots N --shared-arena --episodes E`` with
+the same seed. One of the robots is *selected*: :attr:`Session.env` and
+:attr:`Session.agent` are its own, for the HUD and the Stats panel.
 """
 
 from __future__ import annotations
@@ -26,10 +34,18 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from ...learning import run_identity
 from ...learning.algorithms import make_learner
-from ...learning.episodes import EVAL_STREAM, INTERRUPTED, TRAIN_STREAM, EpisodeResult, Episodes
+from ...learning.episodes import (
+    EVAL_STREAM,
+    INTERRUPTED,
+    TRAIN_STREAM,
+    EpisodeResult,
+    Episodes,
+    Robots,
+)
 from ...learning.qlearning import QLearner
 from ...learning.qtable import QTable, QTableStore
 from ...learning.training import RunFiles
@@ -128,7 +144,6 @@ class Session:
         self.learn = not greedy
         self.table_path = Path(qtable)
         """The Q-table file (written while learning, only read with ``greedy``)."""
-        cfg = env.config
         self.files: RunFiles | None = None
         if self.learn:  # the table and the log locked while the window learns
             store = QTableStore(qtable, purpose="koolio-pm view")
@@ -136,13 +151,10 @@ class Session:
             self.files = RunFiles.open(run, store, log, "koolio-pm view", seed)
             self.table = self.files.table
             self.first = self.files.first
-            self.agent = make_learner(self.table, cfg.learner, None, str(qtable))
-            self.loop = Episodes(env, self.agent, seed, TRAIN_STREAM)
         else:
             self.table = watched_table(env, qtable)
             self.first = 0
-            self.agent = QLearner(self.table, cfg.learner, None)
-            self.loop = Episodes(env, self.agent, seed, EVAL_STREAM, learn=False, epsilon=0.0)
+        self._make_loop(self.learn)
         self.stats = Stats()
         if self.learn and log:
             self.stats.returns, self.stats.at_goal = read_history(log)
@@ -157,6 +169,28 @@ class Session:
         # The next episode's start is shown even when there is nothing to run (``view
         # --episodes 0``): an env that was never reset has no reading to draw.
         self._begin()
+
+    n_robots = 1
+    """Robots in the window (:class:`SharedSession`: several)."""
+    selected = 0
+    """The robot the panels show."""
+
+    def _make_loop(self, learn: bool) -> None:
+        """The learner and the episode loop (learning or greedy)."""
+        cfg = self.env.config
+        if learn:
+            self.agent = make_learner(self.table, cfg.learner, None, str(self.table_path))
+            self.loop = Episodes(self.env, self.agent, self.seed, TRAIN_STREAM)
+        else:
+            self.agent = QLearner(self.table, cfg.learner, None)
+            self.loop = Episodes(
+                self.env, self.agent, self.seed, EVAL_STREAM, learn=False, epsilon=0.0
+            )
+
+    def select(self, robot: int) -> None:
+        """Show robot ``robot`` in the panels (one robot: only 0)."""
+        if robot != 0:
+            raise ValueError(f"no robot {robot} (one robot: 0)")
 
     # -- stepping ------------------------------------------------------------------------
     def _begin(self) -> None:
@@ -244,3 +278,190 @@ class Session:
         finally:
             files.close()
         return res
+
+
+class SharedSession(Session):
+    """:class:`Session` for ``robots`` robots sharing one arena (module doc), ``robots``
+    >= 2 robots like ``env``.
+
+    A step of this session is a *tick*: every running robot makes one step, in index
+    order (a robot waiting for a free start spot spends its turn asking for one). A robot
+    whose episode ends has it recorded at once (table saved, log row, in the order the
+    episodes finish, numbered as ``train`` numbers them) and begins its next episode
+    there and then, as ``train`` does: it left the arena and enters it again at a free
+    start spot (or waits outside for one). As in ``train``, ``episodes`` E < ``robots``
+    runs E robots. :attr:`selected` is the robot the panels show (:meth:`select`).
+
+    Exit folds every episode under way (that made a step) into the table and logs an
+    ``interrupted`` row for each, as Ctrl-C in ``train`` does. Exit Without Save writes
+    nothing: the file stays as saved at the last episode end (with the other robots'
+    updates of their episodes under way as they stood then, as ``train``'s saves hold
+    them).
+    """
+
+    def __init__(
+        self,
+        env: KoolioEnv,
+        qtable: str | Path,
+        *,
+        robots: int,
+        seed: int = 0,
+        episodes: int | None = None,
+        log: str | Path | None = None,
+        greedy: bool = False,
+    ) -> None:
+        from ...task.shared_arena import SharedArena
+
+        if robots < 2:
+            raise ValueError("a shared arena's session needs at least two robots")
+        n = robots if not episodes else max(1, min(robots, episodes))  # train's count
+        self.n_robots = n
+        self.envs = SharedArena.of(env, n)
+        self.selected = 0
+        self.started = 0
+        """Episodes begun (their number gives their seeds, as ``train``'s starts)."""
+        self.robot_stats = [Stats() for _ in range(n)]
+        """Each robot's own totals."""
+        self.robot_episodes = [0] * n
+        """How many episodes each robot has begun in this window."""
+        super().__init__(env, qtable, seed=seed, episodes=episodes, log=log, greedy=greedy)
+
+    # -- the robots -----------------------------------------------------------------------
+    @property  # type: ignore[override]
+    def env(self) -> KoolioEnv:
+        """The selected robot's env."""
+        return self.envs[self.selected]
+
+    @env.setter
+    def env(self, value: KoolioEnv) -> None:  # Session.__init__'s: the robots' own instead
+        pass
+
+    @property  # type: ignore[override]
+    def agent(self) -> Any:
+        """The selected robot's learner."""
+        return self.agents[self.selected]
+
+    @agent.setter
+    def agent(self, value: Any) -> None:
+        pass
+
+    def select(self, robot: int) -> None:
+        """Show robot ``robot`` (0 .. n-1) in the panels."""
+        if not 0 <= robot < self.n_robots:
+            raise ValueError(f"no robot {robot} (robots 0..{self.n_robots - 1})")
+        self.selected = robot
+
+    def _make_loop(self, learn: bool) -> None:
+        cfg = self.envs[0].config
+        if learn:
+            self.agents = [
+                make_learner(self.table, cfg.learner, None, str(self.table_path))
+                for _ in range(self.n_robots)
+            ]
+            self.robots = Robots(self.envs, self.agents, self.seed, TRAIN_STREAM)
+        else:
+            self.agents = [QLearner(self.table, cfg.learner, None) for _ in range(self.n_robots)]
+            self.robots = Robots(
+                self.envs, self.agents, self.seed, EVAL_STREAM, learn=False, epsilon=0.0
+            )
+
+    # -- stepping ------------------------------------------------------------------------
+    def _begin(self) -> None:
+        """Every robot's first episode (shown even when there is nothing to run)."""
+        for r in range(self.n_robots):
+            self._start(r, force=True)
+        self._pending_reset = False
+
+    def _start(self, r: int, force: bool = False) -> None:
+        """Robot ``r``'s next episode, numbered as ``train`` numbers its starts; none when
+        the session's episodes are all begun (``force``: begin it anyway, to be drawn, as
+        the one robot of ``view --episodes 0`` is)."""
+        if self.last is None or self.first + self.started < self.last or force:
+            self.robots.begin(r, self.first + self.started)
+            self.started += 1
+            self.robot_episodes[r] += 1
+            if self.done:  # drawn only: nothing of it runs
+                self.robots.release(r)
+        else:
+            self.robots.release(r)
+
+    @property
+    def episode_over(self) -> bool:
+        """The selected robot has no episode under way."""
+        return not self.robots.running[self.selected]
+
+    def run(self, n: int) -> int:
+        """Perform up to ``n`` ticks (fewer when the session is done); returns how many."""
+        if self.closed:
+            return 0
+        done = 0
+        advance = self.robots.advance
+        while done < n and not self.done:
+            r = advance(stop=lambda: True)  # to the tick's end, or a robot's episode's
+            if r is None:
+                done += 1
+            else:
+                self._finish_robot(r)
+                if self.done:  # the tick's other robots stepped no further: none run
+                    done += 1
+        self.total_steps += done
+        return done
+
+    def _finish_robot(self, r: int) -> None:
+        res = self.robots.result(r, episode=self.episode)
+        if self.files is not None:
+            self.files.finished(res)
+        self.results.append(res)
+        self.stats.add(res)
+        self.robot_stats[r].add(res)
+        self.episode += 1
+        if self.last is not None and self.episode >= self.last:
+            self.done = True
+        else:
+            self._start(r)
+
+    # -- controls --------------------------------------------------------------------------
+    def rescue(self) -> bool:
+        """Force ``Rescue_Robot`` on the selected robot now; False when it has no episode
+        under way or is outside the arena."""
+        env = self.env
+        if self.closed or self.episode_over or env.waiting:
+            return False
+        if not env.world.present[env.robot]:
+            return False
+        env.rescue()
+        return True
+
+    @property
+    def unfinished_steps(self) -> int:
+        """Steps of the selected robot's episode in progress (0 when none is)."""
+        return 0 if self.episode_over else self.env.steps
+
+    def exit(self, save: bool = True) -> EpisodeResult | None:
+        """End the session: Exit (``save``) or Exit Without Save (class doc). Returns the
+        first folded episode's row, if any."""
+        if self.closed:
+            return None
+        self.closed = True
+        files = self.files
+        if files is None:
+            return None
+        rows: list[EpisodeResult] = []
+        try:
+            if save:
+                running = [
+                    r
+                    for r in range(self.n_robots)
+                    if self.robots.running[r] and self.envs[r].steps > 0
+                ]
+                episode = int(self.table.meta.get("episodes", self.first))
+                rows = [
+                    self.robots.result(r, INTERRUPTED, episode=episode + k)
+                    for k, r in enumerate(running)
+                ]
+                if rows:
+                    files.folded(*rows)
+                    self.results.extend(rows)
+        finally:
+            files.close()
+        return rows[0] if rows else None
