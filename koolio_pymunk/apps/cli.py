@@ -688,7 +688,8 @@ def _print_configuration(args: argparse.Namespace, env, say) -> None:
 def resolved_yaml(cfg) -> str:
     """``cfg`` as YAML with its values as they resolve: the fields whose ``None`` means
     "another field's" (``robot.robot_radius``: the robot profile's radius;
-    ``realism.sonar.max_range``: ``sensors.sonar.max_range``) show that value.
+    ``realism.sonar.max_range``: ``sensors.sonar.max_range``; ``rewards.robot_bump``:
+    ``rewards.bump``) show that value.
 
     >>> from koolio_pymunk.store.config import load_config
     >>> "null" in resolved_yaml(load_config()), "null" in load_config().to_yaml()
@@ -698,6 +699,7 @@ def resolved_yaml(cfg) -> str:
 
     data = cfg.to_dict()
     data["robot"]["robot_radius"] = cfg.robot.radius
+    data["rewards"]["robot_bump"] = cfg.rewards.value("robot_bump")
     sonar = data.get("realism", {}).get("sonar", {})
     if sonar.get("max_range", 0) is None:
         sonar["max_range"] = cfg.sensors.sonar.max_range
