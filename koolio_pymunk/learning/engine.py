@@ -125,7 +125,8 @@ def why_not(env: KoolioEnv, agent: object) -> str | None:
 def _step(r: int, gens, agens, readings, world, motion, task, memory, ints, floats, mem,
           among, learner, lints, epsilon, index, table, lam, traces, journal) -> int:  # fmt: skip
     """Robot ``r``'s step (module doc); its outcome code, or :data:`RUNNING`. In a shared
-    arena a robot whose episode ended leaves it (its ``present`` flag, ``among[1]``)."""
+    arena (``among`` not None) a robot whose episode ended leaves it (its ``present`` flag,
+    ``among[1]``)."""
     alpha, gamma, n_actions, no_undo, learn = learner
     lambda_on = lam[0]
     t_meta = traces[3][r]
@@ -139,10 +140,15 @@ def _step(r: int, gens, agens, readings, world, motion, task, memory, ints, floa
         t_meta[0] = 0  # Watkins's cut
     lints[r, L_LAST] = action
     rng, sense = gens[r], robot_group(r, readings[0], readings[1])
-    others = robot_others(r, among[0], among[1], among[2])
-    nxt, code, reward, terminated, truncated = simulate_inline(
-        r, action, rng, sense, world, motion, task, memory, ints, floats, mem, others
-    )
+    if among is None:  # a robot alone (numba prunes the other branch)
+        nxt, code, reward, terminated, truncated = simulate_inline(
+            r, action, rng, sense, world, motion, task, memory, ints, floats, mem, None
+        )
+    else:
+        nxt, code, reward, terminated, truncated = simulate_inline(
+            r, action, rng, sense, world, motion, task, memory, ints, floats, mem,
+            robot_others(r, among[0], among[1], among[2]),
+        )  # fmt: skip
     if learn:
         if lambda_on:
             mine = (traces[0][r], traces[1][r], traces[2][r], t_meta)
@@ -151,10 +157,15 @@ def _step(r: int, gens, agens, readings, world, motion, task, memory, ints, floa
         else:
             update_inline(index, table, alpha, gamma, state, action, reward, nxt, terminated, r,
                    journal)  # fmt: skip
-    if rescue_check_inline(r, rng, sense, world, task, memory, ints, floats, mem, others):
+    if among is None:
+        rescued = rescue_check_inline(r, rng, sense, world, task, memory, ints, floats, mem, None)
+    else:
+        rescued = rescue_check_inline(r, rng, sense, world, task, memory, ints, floats, mem,
+                                      robot_others(r, among[0], among[1], among[2]))  # fmt: skip
+        if terminated or truncated:
+            among[1][r] = False  # KoolioEnv.leave
+    if rescued:
         lints[r, L_LAST] = -1  # QLearner.relocated
-    if (terminated or truncated) and among[0].shape[0] > 0:
-        among[1][r] = False  # KoolioEnv.leave
     if terminated:
         return code
     if truncated:

@@ -121,13 +121,11 @@ class EnvBatch:
         self.shared = first.share is not None
         """The robots share one arena (:mod:`.shared_arena`): bodies to each other."""
         world = first.world
-        robots = world.xy if self.shared else np.zeros((0, 2))
-        present = world.present if self.shared else np.zeros(0, np.bool_)
-        self.among = (robots, present, self.readings.robot_rows)
+        self.among = (world.xy, world.present, self.readings.robot_rows) if self.shared else None
         """:func:`~koolio_pymunk.sensing.reading_kernel.robot_others`' arguments after the
         robot: the shared world's centres and presence flags (its own arrays, which the
         compiled steps keep current: Python's start spots read them), and the rows the
-        readings write the robots hit into. Robots alone: empty centres."""
+        readings write the robots hit into. None: the robots are alone."""
         for r, env in enumerate(envs):
             if hasattr(env, "state_key"):  # an env reset before: its state as it stands
                 self.load(r)

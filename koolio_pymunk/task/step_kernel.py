@@ -173,14 +173,13 @@ def rescue_moves(
     moves (each a :func:`~koolio_pymunk.world.swept_move.sweep` against ``walls``, or in a
     shared arena :func:`~koolio_pymunk.world.swept_move.sweep_among` the other robots of
     ``others``), then a random heading; the draws from ``rng``. Returns the new pose."""
-    robots, present, me = others[0], others[1], others[2]
     backups = rng.integers(0, max_backup + 1)
     for _ in range(backups):
         dx, dy = -distance * math.cos(h), -distance * math.sin(h)
-        if robots.shape[0] > 0:
-            x, y = sweep_among(walls, robots, present, me, x, y, dx, dy, radius)
-        else:
+        if others is None:
             x, y = sweep(walls, x, y, dx, dy, radius)
+        else:
+            x, y = sweep_among(walls, others[0], others[1], others[2], x, y, dx, dy, radius)
     return x, y, rng.uniform(0.0, TWO_PI) % TWO_PI
 
 
@@ -190,26 +189,27 @@ def simulate(
     memory: tuple, ints: np.ndarray, floats: np.ndarray, mem: np.ndarray, others: tuple,
 ) -> tuple:  # fmt: skip
     """``KoolioEnv.simulate(action)`` for robot ``r`` (module doc), drawing from ``rng``
-    (the env's generator) with ``sense`` (the robot's reading group). ``others`` is the
-    robot's group of :func:`~koolio_pymunk.sensing.reading_kernel.robot_others`: in a
-    shared arena (its ``(N, 2)`` centres not empty) the move and the reading meet the other
-    robots, the robot's new centre is written into it and a Bump read from a robot is
-    :data:`ROBOT_BUMP`. Returns ``(next state, outcome code, reward, terminated,
-    truncated)``: the code is an :data:`EVENTS` index, or :data:`WRONG_DOOR_CODE` for a
-    Stop at a misread plate."""
+    (the env's generator) with ``sense`` (the robot's reading group). ``others`` is None
+    for a robot alone, or in a shared arena the robot's group of
+    :func:`~koolio_pymunk.sensing.reading_kernel.robot_others`: the move and the reading
+    then meet the other robots, the robot's new centre is written into it and a Bump read
+    from a robot is :data:`ROBOT_BUMP`. (numba compiles the two cases apart: None's
+    branch is pruned, so a robot alone pays nothing for the shared arena.) Returns ``(next
+    state, outcome code, reward, terminated, truncated)``: the code is an :data:`EVENTS`
+    index, or :data:`WRONG_DOOR_CODE` for a Stop at a misread plate."""
     rewards, zones, cap = task[0], task[1], task[6]
-    robots, present = others[0], others[1]
-    if robots.shape[0] > 0:
-        x, y, h = act_among(action, floats[r, F_X], floats[r, F_Y], floats[r, F_H], rng, world,
-                            motion[r], robots, present, r)  # fmt: skip
-        robots[r, 0], robots[r, 1] = x, y
-        nxt, bump, close = sense_reading_among(x, y, h, rng, sense, others)
-        hit = bump and robot_bump(sense, others)
-    else:
+    if others is None:
         x, y, h = act(action, floats[r, F_X], floats[r, F_Y], floats[r, F_H], rng, world,
                       motion[r])  # fmt: skip
         nxt, bump, close = sense_reading(x, y, h, rng, sense)
         hit = False
+    else:
+        robots = others[0]
+        x, y, h = act_among(action, floats[r, F_X], floats[r, F_Y], floats[r, F_H], rng, world,
+                            motion[r], robots, others[1], r)  # fmt: skip
+        robots[r, 0], robots[r, 1] = x, y
+        nxt, bump, close = sense_reading_among(x, y, h, rng, sense, others)
+        hit = bump and robot_bump(sense, others)
     if len(memory[5]) > 0:
         nxt = remember(nxt, action, sense[7], memory, mem[r])
     code = judge_code(action, close, x, y, bump, zones, hit)
@@ -235,8 +235,8 @@ def rescue_check(
 ) -> bool:  # fmt: skip
     """``KoolioEnv.rescue_check()`` for robot ``r``: once per :func:`simulate`, the auto
     rescue when due (``rescue.wants_rescue``: a draw only then), its moves and a new
-    reading (the memory records it without aging); in a shared arena (``others``, as
-    :func:`simulate`'s) it backs out of the other robots too. Returns whether it rescued."""
+    reading (the memory records it without aging); in a shared arena (``others`` not None,
+    as :func:`simulate`'s) it backs out of the other robots too. Returns whether it rescued."""
     due = ints[r, I_CHECK_RESCUE] == 1
     ints[r, I_CHECK_RESCUE] = 0
     auto, after, chance, max_backup = task[2], task[3], task[4], task[5]
@@ -248,12 +248,12 @@ def rescue_check(
     x, y, h = rescue_moves(floats[r, F_X], floats[r, F_Y], floats[r, F_H], rng, walls,
                            distance, radius, max_backup, others)  # fmt: skip
     floats[r, F_X], floats[r, F_Y], floats[r, F_H] = x, y, h
-    robots = others[0]
-    if robots.shape[0] > 0:
+    if others is None:
+        state = sense_reading(x, y, h, rng, sense)[0]
+    else:
+        robots = others[0]
         robots[r, 0], robots[r, 1] = x, y
         state = sense_reading_among(x, y, h, rng, sense, others)[0]
-    else:
-        state = sense_reading(x, y, h, rng, sense)[0]
     if len(memory[5]) > 0:
         state = remember(state, -1, sense[7], memory, mem[r])
     ints[r, I_STATE] = state

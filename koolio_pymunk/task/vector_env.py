@@ -17,7 +17,7 @@ from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 
 from ..sensing.memory_kernel import FIELDS
-from ..sensing.reading_kernel import robot_group, robot_others
+from ..sensing.reading_kernel import robot_group
 from ..store.kernel_cache import ensure_fresh
 from .action_rules import UNDO as UNDO_ACTIONS
 from .batch import EnvBatch
@@ -53,13 +53,13 @@ UNDO = np.array(UNDO_ACTIONS, np.int64)
 def step_batch(
     actions: np.ndarray, skip: np.ndarray, gens, readings: tuple, world: tuple,
     motion: np.ndarray, task: tuple, memory: tuple, ints: np.ndarray, floats: np.ndarray,
-    mem: np.ndarray, among: tuple, out: tuple,
+    mem: np.ndarray, out: tuple,
 ) -> None:  # fmt: skip
     """``KoolioEnv.step(actions[r])`` (simulate, then the rescue check) for every env ``r``
     not in ``skip``, in index order, each drawing from its own generator. ``out`` =
     ``(rewards, terminated, truncated, events, keywords, codes before rescue, action
-    bits, TimeLimit's cap (0: none), the memory's fields in the observation)``; ``among``
-    is :attr:`~koolio_pymunk.task.batch.EnvBatch.among` (each env alone: empty)."""
+    bits, TimeLimit's cap (0: none), the memory's fields in the observation)``; each env
+    alone in its arena."""
     rewards, terminated, truncated, events, keywords, before, action_bits, cap, fields = out
     for r in range(ints.shape[0]):
         if skip[r]:
@@ -67,16 +67,14 @@ def step_batch(
         a = actions[r]
         state = ints[r, I_STATE]
         sense = robot_group(r, readings[0], readings[1])
-        others = robot_others(r, among[0], among[1], among[2])
         rng = gens[r]
         _, code, reward, term, trunc = simulate_inline(r, a, rng, sense, world, motion, task,
-                                                       memory, ints, floats, mem,
-                                                       others)  # fmt: skip
+                                                       memory, ints, floats, mem, None)  # fmt: skip
         n = sense[8].shape[0]
         before[r, :n] = sense[8]  # the state the action led to: the reading, the memory
         for k in range(fields.shape[0]):
             before[r, n + k] = mem[r, fields[k]]
-        rescue_check_inline(r, rng, sense, world, task, memory, ints, floats, mem, others)
+        rescue_check_inline(r, rng, sense, world, task, memory, ints, floats, mem, None)
         rewards[r] = reward
         terminated[r] = term
         truncated[r] = trunc or (cap > 0 and ints[r, I_STEPS] >= cap)
@@ -217,7 +215,7 @@ class KoolioVectorEnv(gym.vector.VectorEnv):
             self._reset(r, None, None)
         b = self.batch
         step_batch(acts, resets, b.generators.typed, b.reading_args, b.world, b.motion, b.task,
-                   b.memory, b.ints, b.floats, b.mem, b.among, self._out)  # fmt: skip
+                   b.memory, b.ints, b.floats, b.mem, self._out)  # fmt: skip
         rewards[resets] = 0.0
         terminated[resets] = False
         truncated[resets] = False

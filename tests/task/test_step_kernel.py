@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from koolio_pymunk.sensing.reading_kernel import robot_group, robot_others
+from koolio_pymunk.sensing.reading_kernel import robot_group
 from koolio_pymunk.store.config import RewardConfig, load_config
 from koolio_pymunk.task.batch import EnvBatch
 from koolio_pymunk.task.end_zones import EndZones
@@ -124,7 +124,7 @@ def test_simulate_and_rescue_check_are_the_env_s(world) -> None:
         got = simulate(0, a, batch.generators.items[0],
                        robot_group(0, *batch.reading_args), batch.world, batch.motion,
                        batch.task, batch.memory, batch.ints, batch.floats, batch.mem,
-                       robot_others(0, *batch.among))  # fmt: skip
+                       None)  # fmt: skip
         assert (got[0], [*EVENTS, "wrong_door"][got[1]], got[2], got[3], got[4]) == (
             nxt,
             ref.judgement.event,
@@ -136,7 +136,7 @@ def test_simulate_and_rescue_check_are_the_env_s(world) -> None:
         got_rescue = rescue_check(0, batch.generators.items[0],
                                   robot_group(0, *batch.reading_args), batch.world, batch.task,
                                   batch.memory, batch.ints, batch.floats, batch.mem,
-                                  robot_others(0, *batch.among))  # fmt: skip
+                                  None)  # fmt: skip
         assert rescued == got_rescue == bool(batch.ints[0, I_RESCUED])
         rescues += rescued
         f = batch.floats[0]
