@@ -154,8 +154,10 @@ def add_learning_files_args(p: argparse.ArgumentParser) -> None:
     p.set_defaults(files_follow_arena=True)
 
 
-def add_shared_arena_arg(p: argparse.ArgumentParser) -> None:
-    """``--shared-arena`` (train, eval, view)."""
+def add_robots_args(p: argparse.ArgumentParser, robots_help: str) -> None:
+    """``--robots N`` (``robots_help`` says what they do for the command) and
+    ``--shared-arena`` (train, eval, view)."""
+    p.add_argument("--robots", type=int_type(1, MAX_ROBOTS), default=1, help=robots_help)
     p.add_argument(
         "--shared-arena",
         action="store_true",
@@ -268,14 +270,11 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="also print the flags and the whole configuration before training",
     )
-    p.add_argument(
-        "--robots",
-        type=int_type(1, MAX_ROBOTS),
-        default=1,
-        help="robots learning into one shared table, each in its own copy of the arena (default "
-        "1; with --shared-arena all in one)",
+    add_robots_args(
+        p,
+        "robots learning into one shared table, each in its own copy of the arena (default 1; "
+        "with --shared-arena all in one)",
     )
-    add_shared_arena_arg(p)
     p.add_argument(
         "--init-qtable",
         default=None,
@@ -314,14 +313,11 @@ def build_parser() -> argparse.ArgumentParser:
         help="episodes per goal, at least 1 (default 100)",
     )
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
-    p.add_argument(
-        "--robots",
-        type=int_type(1, MAX_ROBOTS),
-        default=1,
-        help="robots playing episodes at once, each in its own copy of the arena (the same "
-        "scores as one after another; default 1), or with --shared-arena all in one",
+    add_robots_args(
+        p,
+        "robots playing episodes at once, each in its own copy of the arena (the same scores "
+        "as one after another; default 1), or with --shared-arena all in one",
     )
-    add_shared_arena_arg(p)
     p.add_argument(
         "--epsilon",
         type=float_type(0.0, 1.0),

@@ -162,15 +162,5 @@ def robot_seed(seed: int, k: int) -> int:
     return int(np.random.SeedSequence([seed, k]).generate_state(1)[0])
 
 
-def parallel_env(
-    robots: int = 2,
-    arena: str | Path | Arena = "hallway",
-    goal: str | None = None,
-    config: Any = None,
-    world: str | Path | None = None,
-    render_mode: str | None = None,
-    max_steps: int | None = None,
-) -> KoolioParallelEnv:
-    """A :class:`KoolioParallelEnv` (PettingZoo's ``ParallelEnv``) of ``robots`` robots in
-    one arena."""
-    return KoolioParallelEnv(robots, arena, goal, config, world, render_mode, max_steps)
+#: PettingZoo's convention: ``parallel_env(...)`` makes the env (the class's arguments).
+parallel_env = KoolioParallelEnv

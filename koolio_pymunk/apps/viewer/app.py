@@ -119,7 +119,7 @@ MAX_STEPS = 10**12
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """The flags of ``train`` plus the window's own."""
-    from ..cli import MAX_ROBOTS, add_env_args, add_learning_files_args, add_shared_arena_arg
+    from ..cli import add_env_args, add_learning_files_args, add_robots_args
     from ..flags import MAX_EPISODES, file_name, float_type, int_type
 
     add_env_args(p)
@@ -131,16 +131,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "table holds; default: no limit)",
     )
     add_learning_files_args(p)
-    p.add_argument(
-        "--robots",
-        type=int_type(1, MAX_ROBOTS),
-        default=1,
-        help="robots in the window, learning into one table or watched (default 1); "
+    add_robots_args(
+        p,
+        "robots in the window, learning into one table or watched (default 1); "
         "several need --shared-arena (robots each in their own copy of the arena are "
         "train's parallel data collection, nothing to watch in one window): select one with "
         "Tab / Shift+Tab or a click, a step is then a tick (every robot one step)",
     )
-    add_shared_arena_arg(p)
     p.add_argument(
         "--discard-unfinished",
         action="store_true",
