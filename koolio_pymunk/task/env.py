@@ -84,9 +84,11 @@ class KoolioEnv(gym.Env):
 
     **Rewards** (first that applies, values in ``Config.rewards``; the defaults: goal 100,
     end_of_world -100, bump -5, stop -5, reverse -10, turn -1, forward -0.5): goal (Stop
-    with the front camera reading the goal Close) > end_of_world > bump (any sonar Bump) >
-    stop / reverse / turn / forward by action. ``info["reward_terms"]`` names them (a
-    ``wrong_door`` step's reward is under ``goal``: its ``event`` tells them apart).
+    with the front camera reading the goal Close) > end_of_world > robot_bump (a Bump read
+    from another robot, robots sharing an arena only; the bump's value unless set) > bump
+    (any sonar Bump) > stop / reverse / turn / forward by action. ``info["reward_terms"]``
+    names them (a ``wrong_door`` step's reward is under ``goal``: its ``event`` tells them
+    apart).
 
     **Episode end.** ``terminated`` at the goal or in an end-of-world zone; ``truncated``
     after ``episode.max_steps`` steps (1500 by default; 0: no cap). With the misread-plate
@@ -124,8 +126,8 @@ class KoolioEnv(gym.Env):
     12 keyword of the previous state and this action, the Q entry the step updates; -1
     after ``reset``), ``event`` (str: the winning reward rule; ``"reset"`` after
     ``reset``), ``rescued`` and ``has_been_rescued`` (bool), ``reward_terms`` (dict of the
-    seven named terms, floats; all 0.0 after ``reset``), ``steps`` and ``bumps`` (int),
-    ``goal`` (str: the active goal's name), ``goal_index`` (int: its index in
+    eight named terms of ``rules.TERMS``, floats; all 0.0 after ``reset``), ``steps`` and
+    ``bumps`` (int), ``goal`` (str: the active goal's name), ``goal_index`` (int: its index in
     :attr:`goal_names`, the arena file's order; with ``goal="random"`` the door drawn for
     this episode), ``action_mask`` (int8 array of 5, above), ``observation_before_rescue``
     (int64 array like the observation, above).
@@ -147,7 +149,15 @@ class KoolioEnv(gym.Env):
     ``really_long_distance`` when nothing is seen) and what the models did (``echo`` per
     sonar sub-arc ray, ``missed`` and ``misread`` per camera).
 
-    All randomness (start headings, sensor noise, realism, rescues) comes from
+    **Sharing an arena** (``share`` and ``robot``: made by
+    :class:`~koolio_pymunk.task.shared_arena.SharedArena`, ``--shared-arena``, the
+    PettingZoo env): the env is robot ``robot`` of a world it shares with other robots'
+    envs; the others are bodies to its moves and sensors, it starts on a free start spot
+    (:meth:`enter`; :attr:`waiting` while none is free) and leaves the arena when its
+    episode ends (:meth:`leave`, called by its episode loop). Alone (the default) it is
+    the paper's single robot.
+
+    All randomness (start headings and spots, sensor noise, realism, rescues) comes from
     ``self.np_random``, seeded by ``reset(seed=...)``.
 
     **Copies.** An env pickles and copies (:mod:`pickle`, :func:`copy.deepcopy`) with its
