@@ -447,11 +447,11 @@ def stamp(
     for a ``new`` table (made empty, or started from another's Q values: ``origin`` says
     which, ``--init-qtable``), the whole run identity, its provenance
     (:func:`koolio_pymunk.store.provenance.of_run`) and the run id. A table made by
-    another algorithm drops that algorithm's data (a Dyna model)."""
+    another algorithm drops that algorithm's data (a Dyna model). ``table`` is new or
+    checked for this run already (:func:`check`): its record is not judged again."""
     mine = run
-    if _algorithm_of(table, "<table>") is not None and table_algorithm(table, "") != (
-        mine.algorithm_name
-    ):
+    theirs = table.meta.get("algorithm")  # None: one-step Q without the rule
+    if isinstance(theirs, dict) and theirs.get("name") != mine.algorithm_name:
         table.sections.clear()  # another algorithm's data does not carry over
     if new:
         episodes = int(table.meta.get("episodes", 0))
