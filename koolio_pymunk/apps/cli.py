@@ -469,10 +469,11 @@ def cmd_train(args: argparse.Namespace) -> int:
     if args.robots > 1 and args.discard_unfinished:
         check_discard(env, args.robots)
     check_shared_arena(args, env)
+    run = RunIdentity.of_run(env)  # what the table and the log are checked against
     if args.init_qtable:
-        start = _check_init_table(args.init_qtable, store, args.log, env)
+        start = _check_init_table(args.init_qtable, store, args.log, run)
     else:
-        start = RunFiles.check(RunIdentity.of_run(env), store, args.log)
+        start = RunFiles.check(run, store, args.log)
         if start is not None:  # a warning (stderr, --quiet too) when the backup stands in
             store.peek(warn=True)
     done = 0 if start is None else int(start.meta.get("episodes", 0))
@@ -481,7 +482,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     if args.verbose:
         _print_configuration(args, env, say)
     if args.init_qtable:
-        _seed_table(args.init_qtable, store, args.log, env, args.seed)
+        _seed_table(args.init_qtable, store, args.log, run, args.seed)
     if more == 0:
         store.close()
         return 0
@@ -730,9 +731,10 @@ def check_discard(env, robots: int) -> None:
         )
 
 
-def _check_init_table(init_path: str, store, log: str, env):
+def _check_init_table(init_path: str, store, log: str, run):
     """``--init-qtable``'s checks that need no lock: the table to start from is readable
-    and made for this run's sensors, ``--qtable`` is new, and so is the log."""
+    and made for the sensors of the run ``run`` (its identity), ``--qtable`` is new, and
+    so is the log."""
     from ..learning import run_identity
     from ..store.episode_log import check_log_path, log_rows
     from .export import load_any_table
@@ -743,7 +745,7 @@ def _check_init_table(init_path: str, store, log: str, env):
             "instead (choose a new --qtable)"
         )
     table = load_any_table(init_path)
-    run_identity.check(table, env, "start", init_path, warn=lambda msg: None)
+    run_identity.check(table, run, "start", init_path, warn=lambda msg: None)
     if log:
         check_log_path(log, store.path)
     if log and log_rows(log):
@@ -753,7 +755,7 @@ def _check_init_table(init_path: str, store, log: str, env):
     return table
 
 
-def _seed_table(init_path: str, store, log: str, env, seed: int) -> None:
+def _seed_table(init_path: str, store, log: str, run, seed: int) -> None:
     """``--init-qtable``: start a new table file from another table (either format): its
     Q values, this run's identity (algorithm, goal, world, arena) and provenance, which
     names the table it started from. The new table's log must be new too (its episodes
@@ -763,11 +765,10 @@ def _seed_table(init_path: str, store, log: str, env, seed: int) -> None:
 
     store.lock()
     try:
-        table = _check_init_table(init_path, store, log, env)
-        run_identity.check(table, env, "start", init_path)  # again, with its warnings
+        table = _check_init_table(init_path, store, log, run)
+        run_identity.check(table, run, "start", init_path)  # again, with its warnings
         origin = {"file": str(init_path), "run_id": table.meta.get("run_id")}
         origin["episodes"] = int(table.meta.get("episodes", 0))
-        run = run_identity.RunIdentity.of_run(env)
         run_identity.stamp(table, run, new=True, seed=seed, origin=origin)
         store.create(table)
     except BaseException:

@@ -48,10 +48,8 @@ True
 from __future__ import annotations
 
 import dataclasses
-import functools
 import hashlib
 import json
-import os
 import re
 import shlex
 import sys
@@ -74,7 +72,7 @@ from ..store.errors import KoolioError, QTableError, located, shown
 from ..store.keyword import KeywordLayout
 from ..store.worlds import IDEAL, world_label
 from ..task.env import KoolioEnv
-from ..world.arena import arena_path, arena_record, load_arena
+from ..world.arena import arena_record
 from .algorithms import PARAMETERS
 from .qtable import QTable
 
@@ -155,19 +153,21 @@ class RunIdentity:
 
     @classmethod
     def of_run(cls, env: KoolioEnv) -> RunIdentity:
-        """The identity of a run in ``env`` (its configuration, arena, goal and world)."""
+        """The identity of a run in ``env`` (its configuration, arena, goal and world),
+        from what the env holds: the arena it loaded (its file is not read again), its
+        goal, its world."""
         cfg = env.config
-        home = arena_goal(env)
         goal = "random" if env.random_goal else env.goal_name
+        sensors, algorithm = sensor_signature(cfg), algorithm_record(cfg.learner)
         rec = arena_record(env.arena)
         return cls(
             layout=env.layout,
-            sensors=_frozen(sensor_signature(cfg)),
+            sensors=_frozen(sensors),
             arena=(rec["name"], rec["sha256"]),
-            goal=None if goal == home else goal,
+            goal=None if goal == env.home_goal else goal,
             world=world_label(env.world_name),
-            algorithm_json=_frozen(algorithm_record(cfg.learner)),
-            home_goal=home,
+            algorithm_json=_frozen(algorithm),
+            home_goal=env.home_goal,
             config=cfg,
             log_columns=tuple(env.randomizer.columns),
         )
@@ -447,11 +447,11 @@ def stamp(
     for a ``new`` table (made empty, or started from another's Q values: ``origin`` says
     which, ``--init-qtable``), the whole run identity, its provenance
     (:func:`koolio_pymunk.store.provenance.of_run`) and the run id. A table made by
-    another algorithm drops that algorithm's data (a Dyna model)."""
+    another algorithm drops that algorithm's data (a Dyna model). ``table`` is new or
+    checked for this run already (:func:`check`): its record is not judged again."""
     mine = run
-    if _algorithm_of(table, "<table>") is not None and table_algorithm(table, "") != (
-        mine.algorithm_name
-    ):
+    theirs = table.meta.get("algorithm")  # None: one-step Q without the rule
+    if isinstance(theirs, dict) and theirs.get("name") != mine.algorithm_name:
         table.sections.clear()  # another algorithm's data does not carry over
     if new:
         episodes = int(table.meta.get("episodes", 0))
@@ -649,26 +649,6 @@ def _memory_signature(mem: MemoryConfig, turn_deg: float) -> dict[str, Any]:
     else:  # a field added later: tables without it keep their bytes
         del fields["goal_bearing"]
     return {"memory": fields}
-
-
-def arena_goal(env: KoolioEnv) -> str:
-    """The active goal of ``env``'s arena file (``--goal`` changes the env's).
-
-    The file is read once per version (its path, size and modification time): a
-    training run asks at every open and check, and parsing the hallway's YAML costs
-    more than a hundred of its episodes' saves."""
-    arena = env.arena
-    try:
-        st = os.stat(arena_path(arena.source))
-        return _file_goal(arena.source, env.config.robot.radius, st.st_mtime_ns, st.st_size)
-    except (KoolioError, OSError):  # an arena made in memory: its own active goal
-        return arena.active_goal
-
-
-@functools.lru_cache(maxsize=16)
-def _file_goal(source: str, radius: float, mtime_ns: int, size: int) -> str:
-    """The active goal of the arena file ``source`` as it is at ``mtime_ns``/``size``."""
-    return load_arena(source, radius).active_goal
 
 
 def describe_goal(goal: str | None, default: str | None = None) -> str:

@@ -198,6 +198,7 @@ class RunFiles:
                 lambda t: run_identity.check(t, run, "resume", source, store.warn),
             )
             run_identity.stamp(table, run)  # the run's learner parameters
+            rules = run_identity.log_rules(run, table)
             log = LogWriter(
                 log_path,
                 int(table.meta.get("episodes", 0)),
@@ -205,7 +206,7 @@ class RunFiles:
                 store.path,
                 purpose,
                 extra_fields=run.log_columns,
-                rules=run_identity.log_rules(run, table),
+                rules=rules,
             )
             try:
                 if store.fresh:
@@ -249,9 +250,9 @@ class RunFiles:
                 )
             return None
         run_identity.check(table, run, "resume", str(store.path), store.warn)
+        rules = run_identity.log_rules(run, table)
         if logged and not store.created:  # a table this run made has a new log (checked)
-            episodes = int(table.meta.get("episodes", 0))
-            check_in_step(log_path, episodes, store.path, run_identity.log_rules(run, table))
+            check_in_step(log_path, int(table.meta.get("episodes", 0)), store.path, rules)
         return table
 
     def finished(self, res: EpisodeResult, save: bool = False) -> None:

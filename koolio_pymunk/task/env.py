@@ -200,6 +200,9 @@ class KoolioEnv(gym.Env):
         self.config.validate("config")
         radius = self.config.robot.radius
         self.arena = arena if isinstance(arena, Arena) else load_arena(arena, radius)
+        self.home_goal = self.arena.active_goal
+        """The arena's own active goal (the one its file names; ``goal`` makes another
+        one active): the goal of a table that records none (a sibling keeps it)."""
         if goal is not None and goal != "random":
             if goal not in self.arena.goal_names():
                 raise ConfigError(
@@ -358,6 +361,7 @@ class KoolioEnv(gym.Env):
         goal = "random" if self.random_goal else None
         other = KoolioEnv(self.arena, config=self.config, goal=goal, observe_goal=self.observe_goal)
         other.world_name = self.world_name
+        other.home_goal = self.home_goal
         if other.goal_name != self.goal_name:  # a reset option made another goal active
             other.set_goal(self.goal_name)
         return other

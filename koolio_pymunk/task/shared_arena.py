@@ -136,4 +136,5 @@ class SharedArena:
             robot=k,
         )
         env.world_name = like.world_name
+        env.home_goal = like.home_goal  # the arena file's own goal, as a sibling keeps it
         return env

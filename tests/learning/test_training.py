@@ -129,22 +129,27 @@ def test_evaluate_is_greedy_and_does_not_learn(tmp_path, monkeypatch) -> None:
     assert sum(rates) == pytest.approx(1.0)
 
 
-def test_the_arena_files_goal_is_read_again_when_the_file_changes(tmp_path) -> None:
-    """``arena_goal`` reads the arena file once per version: an edited file's new active
-    goal is seen (the cache is keyed by the file's size and modification time)."""
-    import os
-
-    from koolio_pymunk.learning.run_identity import arena_goal
+def test_the_run_identity_takes_the_arena_its_env_loaded(tmp_path) -> None:
+    """A run's identity is made from the arena its env loaded, not from the file read
+    again: that arena's active goal is what a table recording no goal was learned for
+    (an edit of the file after the env loaded it changes neither the run nor its
+    identity), another goal made active (``goal``) is recorded, and a sibling (the
+    periodic check's robot) has the same identity."""
+    from koolio_pymunk.learning.run_identity import RunIdentity
     from koolio_pymunk.world.arena import arena_path
 
     text = arena_path("hallway").read_text()
     arena = tmp_path / "h.yaml"
     arena.write_text(text)
     env = KoolioEnv(str(arena))
-    first = arena_goal(env)
+    first = env.arena.active_goal
     other = next(g for g in env.arena.goal_names() if g != first)
     arena.write_text(text.replace(f"active_goal: '{first}'", f"active_goal: '{other}'"))
-    st = arena.stat()
-    os.utime(arena, ns=(st.st_atime_ns, st.st_mtime_ns + 10**9))
     assert arena.read_text() != text  # the premise: the file names another goal now
-    assert arena_goal(env) == other
+    run = RunIdentity.of_run(env)
+    assert (run.goal, run.home_goal) == (None, first)
+    chosen = KoolioEnv(str(arena), goal=first)  # the file's active goal is `other` now
+    mine = RunIdentity.of_run(chosen)
+    assert (mine.goal, mine.home_goal) == (first, other)
+    assert RunIdentity.of_run(chosen.sibling()) == mine
+    assert RunIdentity.of_run(env.sibling()) == run
