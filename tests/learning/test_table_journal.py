@@ -191,7 +191,10 @@ def test_a_sigkill_loses_no_finished_episode_and_resumes_exactly(tmp_path, monke
     snapshot = QTable.from_bytes((part / "t.qtable").read_bytes())
     logged = len(log_rows(log))
     assert snapshot.meta["episodes"] < table.meta["episodes"]  # the premise: journaled
-    assert table.meta["episodes"] in (logged, logged - 1)  # a row is written after its record
+    # A row is written after its record: a kill between the two leaves the table one
+    # episode ahead of the log, whose row is then lost (docs/robustness.md: "one row short").
+    ahead = table.meta["episodes"] - logged
+    assert ahead in (0, 1)
     out = subprocess.run(
         [sys.executable, "-m", "koolio_pymunk", "info", "--qtable", "t.qtable"],
         capture_output=True, text=True, check=True, cwd=part,
@@ -199,8 +202,11 @@ def test_a_sigkill_loses_no_finished_episode_and_resumes_exactly(tmp_path, monke
     assert f"{table.meta['episodes']} episodes" in out.stdout
     monkeypatch.chdir(part)
     assert main(_argv(3000)) == 0
-    for name in ("t.qtable", "t.csv"):
-        assert (part / name).read_bytes() == (full / name).read_bytes(), name
+    assert (part / "t.qtable").read_bytes() == (full / "t.qtable").read_bytes()
+    rows = (full / "t.csv").read_text().splitlines(keepends=True)
+    if ahead:  # every row but the lost episode's (numbered ``logged``)
+        rows = [line for line in rows if not line.startswith(f"{logged},")]
+    assert (part / "t.csv").read_text() == "".join(rows)
     assert not journal.exists()
 
 
