@@ -125,8 +125,9 @@ def why_not(env: KoolioEnv, agent: object) -> str | None:
 def _step(r: int, gens, agens, readings, world, motion, task, memory, ints, floats, mem,
           among, learner, lints, epsilon, index, table, lam, traces, journal) -> int:  # fmt: skip
     """Robot ``r``'s step (module doc); its outcome code, or :data:`RUNNING`. In a shared
-    arena (``among`` not None) a robot whose episode ended leaves it (its ``present`` flag,
-    ``among[1]``)."""
+    arena (``among`` not None) the others are met; a robot whose episode ended leaves the
+    arena when :func:`run` returns it (:meth:`Engine.advance` calls ``KoolioEnv.leave``
+    before any other robot steps)."""
     alpha, gamma, n_actions, no_undo, learn = learner
     lambda_on = lam[0]
     t_meta = traces[3][r]
@@ -162,8 +163,6 @@ def _step(r: int, gens, agens, readings, world, motion, task, memory, ints, floa
     else:
         rescued = rescue_check_inline(r, rng, sense, world, task, memory, ints, floats, mem,
                                       robot_others(r, among[0], among[1], among[2]))  # fmt: skip
-        if terminated or truncated:
-            among[1][r] = False  # KoolioEnv.leave
     if rescued:
         lints[r, L_LAST] = -1  # QLearner.relocated
     if terminated:
@@ -338,7 +337,7 @@ class Engine(Robots):
                 r = int(self.ctl[C_ROBOT])
                 self.codes[r] = self.ctl[C_OUTCOME]
                 self.running[r] = False
-                self.envs[r].leave()  # the pymunk world as the compiled step left it
+                self.envs[r].leave()  # it leaves the arena before any other robot steps
                 return r
             if why == ENTER:
                 r = int(self.ctl[C_ROBOT])

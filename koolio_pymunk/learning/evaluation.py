@@ -347,6 +347,7 @@ class PeriodicCheck:
         best: QTableStore,
         lock: FileLock,
         kept: dict[str, Any] | None,
+        shared_robots: int = 0,
     ) -> None:
         self.every = every
         self.episodes = episodes
@@ -360,7 +361,7 @@ class PeriodicCheck:
         """The kept best table's ``best`` record (None: no best yet)."""
         self.last = 0
         """The ``episode`` of the last row of the evaluations file (0: none)."""
-        self.shared_robots = 0
+        self.shared_robots = shared_robots
         """Robots sharing the arena in the training run (0: none): each check then plays
         with that many robots in one arena, and a check's goal rate is its worst robot's
         (every robot must deliver; the kept best table is the one whose worst robot did
@@ -377,11 +378,12 @@ class PeriodicCheck:
         episodes: int,
         seed: int,
         purpose: str = "koolio-pm train",
+        shared_robots: int = 0,
     ) -> PeriodicCheck:
         """Check and lock the evaluations file and the best table of ``store``'s run
         ``run`` (``log_path``: its log) before anything is written. A new table (no file, no
         backup) refuses an evaluations file with rows or a best table: they belong to
-        another run."""
+        another run. ``shared_robots``: :attr:`shared_robots`."""
         if every < 1:
             raise KoolioError(f"--eval-every: must be >= 1, got {every}")
         if episodes < 1:
@@ -423,7 +425,7 @@ class PeriodicCheck:
             lock.release()
             best.close()
             raise
-        return cls(every, episodes, seed, path, best, lock, kept)
+        return cls(every, episodes, seed, path, best, lock, kept, shared_robots)
 
     def resume(self, episodes: int, warn: Callable[[str], None]) -> None:
         """Bring the evaluations file in step with a table of ``episodes`` episodes: rows

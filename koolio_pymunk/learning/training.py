@@ -427,8 +427,8 @@ def train(
     run = RunIdentity.of_run(env)  # what the run's files are checked against
     checker = None
     if eval_every:
-        checker = PeriodicCheck.open(run, store, log_path, eval_every, eval_episodes, seed)
-        checker.shared_robots = n if shared_arena else 0
+        checker = PeriodicCheck.open(run, store, log_path, eval_every, eval_episodes, seed,
+                                     shared_robots=n if shared_arena else 0)  # fmt: skip
     try:
         files = RunFiles.open(run, store, log_path, "koolio-pm train", seed)
     except BaseException:

@@ -35,7 +35,7 @@ from typing import Any
 
 from ..store.config import Config
 from ..store.errors import ConfigError
-from ..world.arena import Arena
+from ..world.arena import Arena, check_start_point
 from ..world.physics import World
 from ..world.start_area import StartArea
 from .end_zones import EndZones
@@ -59,6 +59,10 @@ class SharedArena:
             (float(arena.start.at[0]), float(arena.start.at[1]))
             for k in range(n_robots)
         ]  # fmt: skip
+        for k in range(min(n_robots, len(sh.starts))):
+            check_start_point(
+                arena, starts[k], config.robot.radius, arena.source, f"shared.starts[{k}]"
+            )
         zones = EndZones(arena.to_world(), config.robot.radius)
         areas: dict[tuple[float, float], StartArea] = {}
         for point in starts:
@@ -107,20 +111,19 @@ class SharedArena:
     ) -> list[KoolioEnv]:
         """``n_robots`` envs, one per robot, sharing one arena (``KoolioEnv``'s
         arguments; ``render_mode`` for robot 0's, which draws them all)."""
-        first = KoolioEnv(arena, config, goal, render_mode, world=world, observe_goal=observe_goal)
-        share = cls(first.arena, first.config, n_robots)
-        return [
-            share.robot_env(k, first, goal, render_mode if k == 0 else None)
-            for k in range(n_robots)
-        ]
+        first = KoolioEnv(arena, config, goal, world=world, observe_goal=observe_goal)
+        return cls.of(first, n_robots, render_mode)
 
     @classmethod
-    def of(cls, env: KoolioEnv, n_robots: int) -> list[KoolioEnv]:
+    def of(cls, env: KoolioEnv, n_robots: int, render_mode: str | None = None) -> list[KoolioEnv]:
         """``n_robots`` envs like ``env`` (its arena, configuration, world and goal,
-        ``random`` included) sharing one arena: the robots of ``--shared-arena``."""
+        ``random`` included) sharing one arena: the robots of ``--shared-arena``
+        (``render_mode`` for robot 0's, which draws them all)."""
         share = cls(env.arena, env.config, n_robots)
         goal = "random" if env.random_goal else env.goal_name
-        return [share.robot_env(k, env, goal) for k in range(n_robots)]
+        return [
+            share.robot_env(k, env, goal, render_mode if k == 0 else None) for k in range(n_robots)
+        ]
 
     def robot_env(
         self, k: int, like: KoolioEnv, goal: str | None, render_mode: str | None = None

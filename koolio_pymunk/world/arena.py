@@ -681,18 +681,25 @@ def _check_markers(arena: Arena, src: str, boxes: list[Box]) -> None:
 
 def _check_start(arena: Arena, robot_radius: float, src: str) -> None:
     start = arena.start
-    _check_free_point(arena, start.at, "start.at", src)
+    check_start_point(arena, start.at, robot_radius, src, "start.at")
     if start.heading_deg is not None and not math.isfinite(start.heading_deg):
         _fail(src, "start.heading_deg", f"not a number or null: {shown(start.heading_deg)}")
+
+
+def check_start_point(arena: Arena, p: Point, robot_radius: float, src: str, item: str) -> None:
+    """A robot of ``robot_radius`` may start at ``p``: strictly inside the walls, in no
+    obstacle, touching no edge; else the one-line :class:`ArenaError` ``src: item: ...``
+    (the arena's own ``start.at``, and a shared arena's ``shared.starts[k]``)."""
+    _check_free_point(arena, p, item, src)
     names = _segment_names(arena)
     for (a, b), name in zip(arena.segments(), names, strict=True):
-        d = geometry.distance_point_segment(start.at, a, b)
+        d = geometry.distance_point_segment(p, a, b)
         if d <= robot_radius + geometry.EPS:
             _fail(
                 src,
-                "start.at",
+                item,
                 f"the robot (radius {_fmt_num(robot_radius)}) at "
-                f"{_fmt_point(start.at)} overlaps or touches edge {name} "
+                f"{_fmt_point(p)} overlaps or touches edge {name} "
                 f"(distance {d:.3g})",
             )
 

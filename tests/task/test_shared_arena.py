@@ -13,7 +13,7 @@ from move_agreement import generated_arenas
 
 import koolio_pymunk
 from koolio_pymunk.store.config import load_config
-from koolio_pymunk.store.errors import ConfigError
+from koolio_pymunk.store.errors import ConfigError, KoolioError
 from koolio_pymunk.task.shared_arena import SharedArena
 from koolio_pymunk.world.physics import COLLISION_SLOP, World
 from koolio_pymunk.world.start_area import StartArea
@@ -76,6 +76,23 @@ def test_robot_goals_and_starts_of_the_configuration() -> None:
     assert envs[1].share.areas[1].start == envs[2].share.areas[2].start == (72.0, 44.0)
     with pytest.raises(ConfigError, match=r"shared.goals\[1\]: no goal named '999'"):
         SharedArena.envs(2, "hallway", load_config(overrides={"shared": {"goals": ["311", "999"]}}))
+
+
+@pytest.mark.parametrize(
+    ("point", "problem"),
+    [
+        ([5000, 44], "point (5000, 44) is outside the walls"),
+        ([400, 5], "the robot (radius 10) at (400, 5) overlaps or touches edge"),
+    ],
+)
+def test_a_robot_start_outside_the_hallway_is_one_line(point, problem) -> None:
+    """``shared.starts`` is held to the arena's own start rule: inside the walls, clear of
+    every edge (else robots would start outside the building, reading nothing)."""
+    cfg = load_config(overrides={"shared": {"starts": [point]}})
+    with pytest.raises(KoolioError) as e:
+        SharedArena.envs(2, "hallway", cfg)
+    assert "shared.starts[0]: " + problem in str(e.value)
+    assert "\n" not in str(e.value)
 
 
 def test_driving_into_another_robot_is_a_robot_bump() -> None:
@@ -320,3 +337,11 @@ def test_train_and_eval_in_a_shared_arena(here, capsys) -> None:
     assert code == 0
     assert "3 robots sharing the arena" in out
     assert "by robot in the shared arena: robot 0 (goal 311)" in out
+
+
+def test_a_bad_robot_start_is_one_line_before_any_file(here, capsys) -> None:
+    from inputs import expect_error
+
+    (here / "far.yaml").write_text("shared: {starts: [[5000, 44]]}\n")
+    argv = ["train", "--robots", "2", "--shared-arena", "--config", "far.yaml"]
+    expect_error(capsys, here, argv, "hallway.yaml: shared.starts[0]: point (5000, 44)")
