@@ -281,8 +281,7 @@ class KoolioEnv(gym.Env):
         self.reset_key(options)
         if self.render_mode == "human":
             self.render()
-        obs = self._obs()
-        return obs, self._info(obs)
+        return self.observe()
 
     def step(self, action: int) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """One step (class doc). An action outside ``Discrete(5)`` (e.g. 7, or 2.7) is
@@ -292,8 +291,15 @@ class KoolioEnv(gym.Env):
         _, reward, terminated, truncated = self.transition(int(action))
         if self.render_mode == "human":
             self.render()
+        obs, info = self.observe()
+        return obs, reward, terminated, truncated, info
+
+    def observe(self) -> tuple[np.ndarray, dict[str, Any]]:
+        """The observation and ``info`` of the state now, as :meth:`reset` and :meth:`step`
+        return them (for a loop that steps with :meth:`transition`, such as the shared
+        arena's PettingZoo env)."""
         obs = self._obs()
-        return obs, reward, terminated, truncated, self._info(obs)
+        return obs, self._info(obs)
 
     def action_masks(self) -> np.ndarray:
         """``info["action_mask"]`` now: 1 for each action the no-undo rule
@@ -503,8 +509,7 @@ class KoolioEnv(gym.Env):
     def rescue(self) -> tuple[np.ndarray, dict[str, Any]]:
         """Force ``Rescue_Robot`` now (the viewer's Rescue button)."""
         self._rescue()
-        obs = self._obs()
-        return obs, self._info(obs)
+        return self.observe()
 
     # -- internals ---------------------------------------------------------------------
     def set_goal(self, name: str) -> None:

@@ -110,8 +110,7 @@ class KoolioParallelEnv(ParallelEnv):
             env.reset(seed=None if seed is None else robot_seed(seed, k))
             if env.waiting:  # the capacity check makes this impossible: say so if not
                 raise RuntimeError(f"{agent}: no free start spot at the reset")
-            obs[agent] = env._obs()
-            infos[agent] = self._info(k, obs[agent])
+            obs[agent], infos[agent] = self._observe(k)
         self.agents = list(self.possible_agents)
         if self.render_mode == "human":
             self.render()
@@ -131,10 +130,9 @@ class KoolioParallelEnv(ParallelEnv):
             _, reward, terminated, truncated = env.transition(int(actions[agent]))
             if terminated or truncated:
                 env.leave()
-            obs[agent] = env._obs()
+            obs[agent], infos[agent] = self._observe(k)
             rewards[agent] = float(reward)
             terms[agent], truncs[agent] = bool(terminated), bool(truncated)
-            infos[agent] = self._info(k, obs[agent])
         self.agents = [a for a in self.agents if not (terms[a] or truncs[a])]
         if self.render_mode == "human":
             self.render()
@@ -148,8 +146,10 @@ class KoolioParallelEnv(ParallelEnv):
         for env in self.envs:
             env.close()
 
-    def _info(self, k: int, obs: np.ndarray) -> dict[str, Any]:
-        return {**self.envs[k]._info(obs), "robot": k}
+    def _observe(self, k: int) -> tuple[np.ndarray, dict[str, Any]]:
+        """Robot ``k``'s observation and ``info`` (its env's, and ``robot``: ``k``)."""
+        obs, info = self.envs[k].observe()
+        return obs, {**info, "robot": k}
 
 
 def robot_seed(seed: int, k: int) -> int:

@@ -114,7 +114,7 @@ def test_driving_into_another_robot_is_a_robot_bump() -> None:
     assert ("bump", -5.0) not in events
     x = a.world.pose(0)[0]
     assert 440.0 - x >= 20.0 - 1e-6  # stopped at the other robot, not through it
-    assert a._info(a._obs())["reward_terms"]["robot_bump"] == -13.0
+    assert a.observe()[1]["reward_terms"]["robot_bump"] == -13.0
 
 
 def test_a_finished_robot_leaves_and_a_new_episode_waits_for_a_free_spot() -> None:
