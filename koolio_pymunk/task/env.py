@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import gymnasium as gym
 import numpy as np
@@ -20,13 +20,11 @@ from ..store.worlds import world_name
 from ..world.arena import Arena, Point, load_arena
 from ..world.motion_errors import MotionErrors
 from ..world.physics import ACTION_NAMES, Action, World
+from ..world.start_area import StartArea
 from .action_rules import barred
 from .end_zones import EndZones
 from .rescue import rescue_robot, wants_rescue
 from .rules import TERMS, Judgement, judge
-
-if TYPE_CHECKING:
-    from .shared_arena import SharedArena
 
 #: The event of a Stop in front of a misread plate (realism ``camera.misread``): the robot
 #: believes it delivered (the goal reward, the episode ends) at another door.
@@ -36,6 +34,15 @@ NO_KEYWORD = -1
 """``info["keyword"]`` after ``reset``: no action taken yet (keywords are >= 0)."""
 RESET_EVENT = "reset"
 """``info["event"]`` after ``reset``: no reward rule judged yet."""
+
+
+class ArenaShare(Protocol):
+    """What a robot's env needs of an arena it shares with other robots
+    (:class:`~koolio_pymunk.task.shared_arena.SharedArena`): the world they all stand in,
+    and each robot's start area."""
+
+    world: World
+    areas: list[StartArea]
 
 
 class KoolioEnv(gym.Env):
@@ -180,7 +187,7 @@ class KoolioEnv(gym.Env):
         world: str | Path | None = None,
         observe_goal: bool = False,
         overrides: dict[str, Any] | None = None,
-        share: SharedArena | None = None,
+        share: ArenaShare | None = None,
         robot: int = 0,
     ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
