@@ -109,19 +109,23 @@ def _side(
     robots: int,
     compiled: bool,
     shared: bool = False,
+    own_tables: bool = False,
 ):
     """One side of :func:`compare_robots`: an env, a table, the robots' learners, the loop
-    (``shared``: the robots in one arena)."""
+    (``shared``: the robots in one arena; ``own_tables``: each robot its own rows)."""
     from koolio_pymunk.learning.algorithms import make_learner
     from koolio_pymunk.learning.engine import robots as make_robots
     from koolio_pymunk.learning.qtable import QTable
     from koolio_pymunk.store.config import load_config
+    from koolio_pymunk.store.keyword import own_tables as own_layout
     from koolio_pymunk.task.env import KoolioEnv
     from koolio_pymunk.task.shared_arena import SharedArena
 
     cfg = load_config(overrides=overrides, world=world)
     envs = SharedArena.envs(robots, arena, cfg) if shared else KoolioEnv(arena, config=cfg)
     layout = envs[0].layout if shared else envs.layout
+    if own_tables:
+        layout = own_layout(layout, robots)
     table = QTable(layout, {}, cfg.learner.q_init)
     agents = [make_learner(table, cfg.learner, None) for _ in range(robots)]
     loop = make_robots(envs, agents, seed, compiled=compiled)
@@ -162,10 +166,12 @@ def compare_robots(
     overrides: dict | None = None,
     max_steps: int | None = None,
     shared: bool = False,
+    own_tables: bool = False,
 ) -> dict:
     """Train ``episodes`` seeded episodes of ``robots`` robots in ``arena`` (in ``world``,
     ``overrides`` laid over the configuration, ``max_steps`` the step cap; ``shared``: all
-    in one arena, :mod:`koolio_pymunk.task.shared_arena`) twice, on the
+    in one arena, :mod:`koolio_pymunk.task.shared_arena`; ``own_tables``: each robot
+    learns into its own rows, ``train --tables each``) twice, on the
     Python loop (:class:`koolio_pymunk.learning.episodes.Robots`, the reference) and on the
     compiled step engine, and compare after every finished episode its log row, the whole
     Q-table and every robot's pose, state, counters, memory, generators and learner, bit
@@ -180,7 +186,8 @@ def compare_robots(
         over["episode"] = {**over.get("episode", {}), "max_steps": max_steps}
     t = time.perf_counter()
     sides = [
-        _side(arena, world, over, seed, robots, compiled, shared) for compiled in (False, True)
+        _side(arena, world, over, seed, robots, compiled, shared, own_tables)
+        for compiled in (False, True)
     ]
     started = [0, 0]
     for (_, loop), k in zip(sides, range(2)):

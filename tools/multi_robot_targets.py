@@ -19,6 +19,9 @@ kept best table, seeds 0-2. It prints every check's worst robot, and both fresh
 evaluations robot by robot.
 
     nice .venv/bin/python tools/multi_robot_targets.py four crossing --seeds 0 1 2
+
+``--tables each`` runs the same plans with each robot learning its own rows of the table
+(``train --tables each``), for docs/multi-robot.md's comparison.
 """
 
 from __future__ import annotations
@@ -44,8 +47,15 @@ PLANS = {
 }
 
 
-def run(name: str, seed: int, episodes: int | None = None, every: int | None = None) -> dict:
-    """Target ``name``'s run of ``seed`` (module doc)."""
+def run(
+    name: str,
+    seed: int,
+    episodes: int | None = None,
+    every: int | None = None,
+    tables: str = "shared",
+) -> dict:
+    """Target ``name``'s run of ``seed`` (module doc; ``tables`` ``each``: each robot
+    learns its own rows, ``train --tables each``)."""
     from koolio_pymunk.learning.evaluation import best_path, evaluate
     from koolio_pymunk.learning.qtable import QTableStore
     from koolio_pymunk.learning.training import train
@@ -59,7 +69,7 @@ def run(name: str, seed: int, episodes: int | None = None, every: int | None = N
         store = QTableStore(table)
         res = train(KoolioEnv("hallway", config=config), store, total, seed, log, report=None,
                     robots=robots, shared_arena=True, eval_every=chunk,
-                    eval_episodes=EVAL_EPISODES)  # fmt: skip
+                    eval_episodes=EVAL_EPISODES, own_tables=tables == "each")  # fmt: skip
         store.close()
         fresh = {}
         for which, path in (("best", best_path(table)), ("last", table)):
@@ -70,6 +80,7 @@ def run(name: str, seed: int, episodes: int | None = None, every: int | None = N
     checks = [{"episodes": c.episode, "worst": c.result.goal_rate} for c in res.checks]
     return {
         "target": name,
+        "tables": tables,
         "seed": seed,
         "checks": checks,
         "fresh": fresh,
@@ -91,13 +102,22 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--episodes", type=int, default=None, help="episodes in all (the plan's)")
     p.add_argument("--every", type=int, default=None, help="episodes between checks (the plan's)")
     p.add_argument("--out", default=None, help="also write the figures as JSON")
+    p.add_argument(
+        "--tables",
+        choices=("shared", "each"),
+        default="shared",
+        help="one table all robots learn (the targets') or each robot its own rows",
+    )
     args = p.parse_args(argv)
     results = []
     for name in args.targets:
         robots, _, total, _ = PLANS[name]
-        print(f"{name}: {robots} robots sharing the hallway, up to {args.episodes or total}")
+        print(
+            f"{name}: {robots} robots sharing the hallway, up to {args.episodes or total}, "
+            f"tables {args.tables}"
+        )
         for seed in args.seeds:
-            r = run(name, seed, args.episodes, args.every)
+            r = run(name, seed, args.episodes, args.every, args.tables)
             results.append(r)
             worst = "  ".join(f"{c['episodes']}: {c['worst']:.0%}" for c in r["checks"])
             print(f"  seed {seed}  checks (worst robot): {worst}")

@@ -15,6 +15,7 @@ never share them.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import difflib
 import importlib
 import json
@@ -170,6 +171,12 @@ def check_shared_arena(args: argparse.Namespace, env) -> None:
     """``--shared-arena``'s combinations, before any file is touched: it needs --robots N
     with N >= 2, and the robots must fit their start areas (one line each)."""
     if not getattr(args, "shared_arena", False):
+        if getattr(args, "tables", "shared") == "each":
+            raise KoolioError(
+                "--tables each: needs --robots N --shared-arena (robots alone in copies of "
+                "the arena, each learning only its own rows, are N separate runs: run N "
+                "trains)"
+            )
         return
     if args.robots < 2:
         raise KoolioError(
@@ -274,6 +281,14 @@ def build_parser() -> argparse.ArgumentParser:
         p,
         "robots learning into one shared table, each in its own copy of the arena (default 1; "
         "with --shared-arena all in one)",
+    )
+    p.add_argument(
+        "--tables",
+        choices=("shared", "each"),
+        default="shared",
+        help="with --robots N --shared-arena: one table all robots learn into (shared, the "
+        "default) or each robot its own rows of it (each: the keyword leads with the "
+        "robot's index; docs/multi-robot.md)",
     )
     p.add_argument(
         "--init-qtable",
@@ -469,7 +484,8 @@ def cmd_train(args: argparse.Namespace) -> int:
     if args.robots > 1 and args.discard_unfinished:
         check_discard(env, args.robots)
     check_shared_arena(args, env)
-    run = RunIdentity.of_run(env)  # what the table and the log are checked against
+    own = args.robots if args.tables == "each" else 0
+    run = RunIdentity.of_run(env, own)  # what the table and the log are checked against
     if args.init_qtable:
         start = _check_init_table(args.init_qtable, store, args.log, run)
     else:
@@ -504,6 +520,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         fsync=args.fsync,
         tensorboard=args.tensorboard,
         shared_arena=args.shared_arena,
+        own_tables=bool(own),
     )
     if args.verbose and result.python_reason is not None:
         say(f"stepped in the Python loop: {result.python_reason}")
@@ -667,6 +684,7 @@ def _print_configuration(args: argparse.Namespace, env, say) -> None:
         ("config", config_label(args.config)),
         ("world", config_label(args.world, "--world")),
         ("robots", f"{args.robots}, sharing one arena" if args.shared_arena else args.robots),
+        ("tables", "each robot its own rows" if args.tables == "each" else "one, shared"),
     ]
     if args.init_qtable:
         rows.append(("init-qtable", f"{args.init_qtable} (the new table starts from it)"))
@@ -790,7 +808,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
     policy = is_policy_file(args.qtable)
     # --goal all scores every door: it asks what a random-goal run asks of the table
     asks = _make_env(argparse.Namespace(**{**vars(args), "goal": "random"})) if goal_all else env
-    run_identity.check(table, asks, "score", args.qtable)
+    run_identity.check(table, played(asks, args, table), "score", args.qtable)
     goals = env.arena.goal_names() if goal_all else [None]
     announce_compile(env)
     epsilon = eps or 0.0
@@ -845,6 +863,15 @@ def cmd_eval(args: argparse.Namespace) -> int:
         mean = sum(r.goal_rate for r in results) / len(results)
         print(f"  {'all':>6} {mean:>16.1%}")
     return 0
+
+
+def played(env, args: argparse.Namespace, table):
+    """The identity of ``eval``'s run in ``env`` with ``table`` (its robots sharing the
+    arena play their own rows of a table that holds each robot's:
+    :meth:`RunIdentity.of_robots <koolio_pymunk.learning.run_identity.RunIdentity.of_robots>`)."""
+    from ..learning.run_identity import RunIdentity
+
+    return RunIdentity.of_robots(env, args.robots if args.shared_arena else 1, table)
 
 
 def read_table(path: str):
@@ -974,6 +1001,7 @@ def _describe_table(table, path: str, cfg, config: str | None, shown) -> None:
     from ..learning import run_identity
     from ..learning.qtable import human_bytes
     from ..learning.run_identity import RunIdentity, describe_goal, describe_world
+    from ..store.keyword import own_tables, table_robots
 
     share = table.entries / table.layout.n_entries
     size = os.stat(path).st_size
@@ -998,8 +1026,16 @@ def _describe_table(table, path: str, cfg, config: str | None, shown) -> None:
         )
     if table.layout != shown:
         print(f"  its keyword ({table.layout.total_bits} bits): {_keyword_line(table.layout)}")
+    mine = RunIdentity.of_config(cfg)
+    own = table_robots(table.layout)
+    if own:
+        print(
+            f"  holds each of {own} robots' own rows (train --tables each; "
+            "export --robot K takes robot K's alone)"
+        )
+        mine = dataclasses.replace(mine, layout=own_tables(mine.layout, own))
     try:
-        run_identity.check(table, RunIdentity.of_config(cfg), "inspect", path)
+        run_identity.check(table, mine, "inspect", path)
     except KoolioError as exc:
         which = f"--config {config}" if config else "the default configuration (no --config)"
         problem = str(exc).removeprefix(f"{path}: ")

@@ -95,10 +95,24 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="episode whose epsilon (from the schedule) is the robot's default "
         "(default: the table's episode count)",
     )
+    p.add_argument(
+        "--robot",
+        type=int_type(0, 1 << 16),
+        default=None,
+        metavar="K",
+        help="of a table that holds each robot's own rows (train --tables each): robot K's "
+        "rows alone, as one robot's table (a policy, or a .qtable that eval, view and "
+        "transfer read)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
     table = load_any_table(args.qtable)
+    if args.robot is not None:
+        try:
+            table = table.robot_table(args.robot)
+        except ValueError as e:
+            raise QTableError(located(args.qtable, "--robot", str(e))) from None
     out = check_path(args.out, "--out")
     if out.is_dir():  # before its lock file's name is made from it
         raise FileError(located(str(out), "", "cannot write: is a folder, not a file"))

@@ -1,5 +1,9 @@
 """The step engine: N >= 1 robots' episodes on one compiled step, one shared table.
 
+(A table of ``train --tables each`` gives each robot its own rows of it: the robot's
+state keys carry its index, ``lints[r, L_OWN]``, as
+:attr:`Robots.offsets <koolio_pymunk.learning.episodes.Robots.offsets>` does.)
+
 :class:`Engine` runs the episodes of :class:`~koolio_pymunk.learning.episodes.Robots` (N
 robots, each with its own env and learner, one Q-table, stepped in tick order) without
 Python between the steps: :func:`run` makes, robot after robot in index order, the step
@@ -96,8 +100,9 @@ FINISHED, BUDGET, NEED_ROOM, IDLE, ENTER = 0, 1, 2, 3, 4
 #: ``ctl``: the next robot to step, the robot that finished and its outcome code.
 C_CURSOR, C_ROBOT, C_OUTCOME = range(3)
 #: ``lints`` of a robot: running an episode, its last action (the no-undo rule; -1: none),
-#: waiting outside a shared arena for a free start spot.
-L_ACTIVE, L_LAST, L_WAITING = range(3)
+#: waiting outside a shared arena for a free start spot, what its state keys add in the
+#: table (:attr:`Robots.offsets <koolio_pymunk.learning.episodes.Robots.offsets>`).
+L_ACTIVE, L_LAST, L_WAITING, L_OWN = range(4)
 
 
 def why_not_config(env: KoolioEnv) -> str | None:
@@ -131,7 +136,8 @@ def _step(r: int, gens, agens, readings, world, motion, task, memory, ints, floa
     alpha, gamma, n_actions, no_undo, learn = learner
     lambda_on = lam[0]
     t_meta = traces[3][r]
-    state = ints[r, 0]  # I_STATE
+    own = lints[r, L_OWN]  # its own rows' offset (0: one table all share)
+    state = ints[r, 0] + own  # I_STATE
     if lambda_on and state != t_meta[1]:  # not where the last step ended: no traces
         t_meta[0] = 0
     bar = _barred(lints[r, L_LAST]) if no_undo else -1
@@ -150,6 +156,7 @@ def _step(r: int, gens, agens, readings, world, motion, task, memory, ints, floa
             r, action, rng, sense, world, motion, task, memory, ints, floats, mem,
             robot_others(r, among[0], among[1], among[2]),
         )  # fmt: skip
+    nxt += own
     if learn:
         if lambda_on:
             mine = (traces[0][r], traces[1][r], traces[2][r], t_meta)
@@ -283,7 +290,7 @@ class Engine(Robots):
         first = agents[0]
         self.shared = SharedTable(first.table)
         self.ctl = np.zeros(3, np.int64)
-        self.lints = np.zeros((n, 3), np.int64)
+        self.lints = np.zeros((n, 4), np.int64)
         self.lints[:, L_LAST] = -1
         self.epsilon_of = np.zeros(n)
         """Each robot's epsilon for its episode."""
@@ -313,7 +320,7 @@ class Engine(Robots):
         if self.epsilon is not None:
             agent.epsilon = self.epsilon
         self.epsilon_of[r] = agent.epsilon
-        self.lints[r] = (1, agent.last, int(env.waiting))
+        self.lints[r] = (1, agent.last, int(env.waiting), self.offsets[r])
         self.traces[3][r] = (0, -1)
         self.journal[2][r] = 0
         self.episodes[r] = episode

@@ -51,6 +51,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from ..store.keyword import robot_offset, table_robots
 from ..task.env import KoolioEnv
 
 #: Seed streams: training, evaluation and robot episodes of one seed never share starts.
@@ -154,6 +155,7 @@ class Episodes:
         stream: int = TRAIN_STREAM,
         learn: bool = True,
         epsilon: float | None = None,
+        key_offset: int = 0,
     ) -> None:
         self.env = env
         self.agent = agent
@@ -161,6 +163,9 @@ class Episodes:
         self.stream = stream
         self.learn = learn
         self.epsilon = epsilon
+        self.key_offset = key_offset
+        """Added to every state key the agent sees: the robot's own rows in a table that
+        holds each robot's (:func:`~koolio_pymunk.store.keyword.robot_offset`; 0: shared)."""
         self.episode = -1
         """The number of the episode begun last (-1: none yet)."""
         self.outcome: str | None = None
@@ -185,15 +190,16 @@ class Episodes:
         if env.waiting:
             env.enter()
             return None
-        state = env.state_key
+        own = self.key_offset
+        state = env.state_key + own
         action = agent.act(state)
         nxt, reward, terminated, truncated = env.simulate(action)
         if self.learn:  # from the state the action led to, before any rescue (§5.4.8)
-            agent.observe(state, action, reward, nxt, terminated)
+            agent.observe(state, action, reward, nxt + own, terminated)
         if env.rescue_check():
             relocated = getattr(agent, "relocated", None)
             if relocated is not None:
-                relocated(env.state_key)
+                relocated(env.state_key + own)
         if terminated:
             self.outcome = env.judgement.event  # type: ignore[union-attr]
         elif truncated:
@@ -230,19 +236,34 @@ class Episodes:
         )
 
 
+def robot_offsets(agents: list[Agent]) -> list[int]:
+    """Each robot's :func:`~koolio_pymunk.store.keyword.robot_offset` in its learners'
+    table (all 0 for a table all share, or learners without one). ``ValueError`` when the
+    table holds fewer robots' own rows than there are robots."""
+    layout = getattr(getattr(agents[0], "table", None), "layout", None)
+    own = table_robots(layout) if layout is not None else 0
+    if not own:
+        return [0] * len(agents)
+    if len(agents) > own:
+        raise ValueError(f"a table of {own} robots' own rows, and {len(agents)} robots")
+    return [robot_offset(layout, r) for r in range(len(agents))]
+
+
 class Robots:
     """N robots' episodes stepped in tick order into one table, in Python: the reference
     of the compiled step engine (:class:`~koolio_pymunk.learning.engine.Engine`, the same
     interface and the same episodes bit for bit).
 
     Robot ``r`` has its env ``envs[r]`` and its learner ``agents[r]`` (the learners share
-    one Q-table). A *tick* steps every running robot once, in index order, each a whole
-    :meth:`Episodes.step` (act, simulate, learn, rescue): robot ``r`` sees the table as
-    the robots before it left it in that tick. :meth:`begin` starts robot ``r``'s episode
-    number ``episode`` (its seeds are ``(seed, episode, stream)``'s, whatever the robot);
-    :meth:`advance` steps until a robot finishes and returns it; the caller records the
-    episode (:meth:`result`) and begins the robot's next one, which makes its first step
-    in the next tick. With one robot this is :class:`Episodes`, step for step.
+    one Q-table; a table that holds each robot's own rows, ``train --tables each``, gives
+    robot ``r`` its own: :attr:`offsets`). A *tick* steps every running robot once, in index
+    order, each a whole :meth:`Episodes.step` (act, simulate, learn, rescue): robot ``r``
+    sees the table as the robots before it left it in that tick. :meth:`begin` starts robot
+    ``r``'s episode number ``episode`` (its seeds are ``(seed, episode, stream)``'s,
+    whatever the robot); :meth:`advance` steps until a robot finishes and returns it; the
+    caller records the episode (:meth:`result`) and begins the robot's next one, which makes
+    its first step in the next tick. With one robot this is :class:`Episodes`, step for
+    step.
     """
 
     def __init__(
@@ -258,7 +279,12 @@ class Robots:
             raise ValueError("one env and one learner per robot, at least one robot")
         self.envs, self.agents = envs, agents
         self.seed, self.stream, self.learn, self.epsilon = seed, stream, learn, epsilon
-        self.loops = [Episodes(e, a, seed, stream, learn, epsilon) for e, a in zip(envs, agents)]
+        self.offsets = robot_offsets(agents)
+        """What robot ``r``'s state keys add in the table (all 0: one table all share)."""
+        self.loops = [
+            Episodes(e, a, seed, stream, learn, epsilon, own)
+            for e, a, own in zip(envs, agents, self.offsets)
+        ]
         self.episodes = [-1] * len(envs)
         """Each robot's current (or last) episode number."""
         self.running = [False] * len(envs)

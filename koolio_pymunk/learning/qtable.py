@@ -81,7 +81,15 @@ from ..store.files import (
     remove_stale_temps,
     staged_write,
 )
-from ..store.keyword import MAX_ACTIONS, MAX_KEYWORD_BITS, MAX_LEVELS, KeywordLayout
+from ..store.keyword import (
+    MAX_ACTIONS,
+    MAX_KEYWORD_BITS,
+    MAX_LEVELS,
+    KeywordLayout,
+    base_layout,
+    robot_offset,
+    table_robots,
+)
 from ..store.locks import FileLock
 from . import table_journal
 from .dyna_model import SECTION, Model
@@ -147,6 +155,33 @@ class QTable:
             {k: list(v) for k, v in self.rows.items()},
             {k: bytes(v) for k, v in self.sections.items()},
         )
+
+    def robot_table(self, robot: int) -> QTable:
+        """Robot ``robot``'s own rows of a table that holds each robot's (``train --tables
+        each``), as a table of one robot (the keyword without the robot field; its header
+        this table's, with ``robot``: ``{"index", "of"}``). ``ValueError`` when the table
+        holds no such robot's rows, or data sections (Dyna-Q's model is not split).
+
+        >>> from koolio_pymunk.store.keyword import own_tables
+        >>> t = QTable(own_tables(KeywordLayout((("A", 3),)), 2))
+        >>> t.row(0b1_10)[1] = 2.5
+        >>> one = t.robot_table(1)
+        >>> one.layout.fields, one.rows, one.meta["robot"]
+        ((('A', 3),), {2: [0.0, 2.5, 0.0, 0.0, 0.0]}, {'index': 1, 'of': 2})
+        """
+        own = table_robots(self.layout)
+        if not 0 <= robot < own:
+            held = f"the rows of robots 0..{own - 1}" if own else "no robot's own rows"
+            raise ValueError(f"no robot {robot}'s own rows: the table holds {held}")
+        if self.sections:
+            names = ", ".join(sorted(self.sections))
+            raise ValueError(f"data sections ({names}) are not split by robot")
+        base = base_layout(self.layout)
+        low = robot_offset(self.layout, 1) - 1
+        mine = robot_offset(self.layout, robot)
+        rows = {k & low: list(v) for k, v in self.rows.items() if k & ~low == mine}
+        meta = dict(self.meta) | {"robot": {"index": robot, "of": own}}
+        return QTable(base, meta, self.q_init, rows)
 
     # -- bytes ----------------------------------------------------------------------
     def to_bytes(self) -> bytes:

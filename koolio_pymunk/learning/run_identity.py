@@ -69,7 +69,8 @@ from ..store.config import (
 )
 from ..store.episode_log import RowRules
 from ..store.errors import KoolioError, QTableError, located, shown
-from ..store.keyword import KeywordLayout
+from ..store.keyword import KeywordLayout, base_layout, table_robots
+from ..store.keyword import own_tables as own_layout
 from ..store.worlds import IDEAL, world_label
 from ..task.env import KoolioEnv
 from ..world.arena import arena_record
@@ -152,16 +153,18 @@ class RunIdentity:
         return isinstance(rec, dict) and rec.get("no_undo") is True
 
     @classmethod
-    def of_run(cls, env: KoolioEnv) -> RunIdentity:
+    def of_run(cls, env: KoolioEnv, own_tables: int = 0) -> RunIdentity:
         """The identity of a run in ``env`` (its configuration, arena, goal and world),
         from what the env holds: the arena it loaded (its file is not read again), its
-        goal, its world."""
+        goal, its world. ``own_tables`` N > 0: N robots each with its own rows of the
+        table (``train --tables each``: the layout leads with
+        :data:`~koolio_pymunk.store.keyword.ROBOT_FIELD`)."""
         cfg = env.config
         goal = "random" if env.random_goal else env.goal_name
         sensors, algorithm = sensor_signature(cfg), algorithm_record(cfg.learner)
         rec = arena_record(env.arena)
         return cls(
-            layout=env.layout,
+            layout=own_layout(env.layout, own_tables) if own_tables else env.layout,
             sensors=_frozen(sensors),
             arena=(rec["name"], rec["sha256"]),
             goal=None if goal == env.home_goal else goal,
@@ -171,6 +174,15 @@ class RunIdentity:
             config=cfg,
             log_columns=tuple(env.randomizer.columns),
         )
+
+    @classmethod
+    def of_robots(cls, env: KoolioEnv, robots: int, table: QTable | None) -> RunIdentity:
+        """The identity of ``robots`` robots sharing ``env``'s arena (1: a robot alone)
+        that play or learn ``table`` (``eval``, ``view``; None: a new table, one all
+        share): they have their own rows when the table holds each robot's (``train
+        --tables each``), so the check compares their number with the table's."""
+        own = table is not None and robots > 1 and table_robots(table.layout) > 0
+        return cls.of_run(env, robots if own else 0)
 
     @classmethod
     def of_config(cls, cfg: Config, world: str | None = None) -> RunIdentity:
@@ -323,6 +335,23 @@ def _run(theirs, mine, table, source, purpose):
 def _layout(theirs, mine, table, source, purpose):
     if theirs.layout == mine.layout:
         return None
+    own, asked = table_robots(theirs.layout), table_robots(mine.layout)
+    if own != asked and base_layout(theirs.layout) == base_layout(mine.layout):
+        if not own:
+            fix = ": give a new --qtable" if purpose == "resume" else ""
+            return "layout", (
+                f"one table all robots share, this run gives {asked} robots their own rows "
+                f"(--tables each){fix}"
+            )
+        how = f"--robots {own} --shared-arena"
+        if purpose == "resume":
+            how += " --tables each"
+        elif purpose in ("export", "transfer", "inspect"):
+            how = "export --robot K --out ROBOT.qtable takes robot K's rows alone"
+            return "layout", f"holds the own rows of {own} robots (train --tables each): {how}"
+        return "layout", (
+            f"holds the own rows of {own} robots (train --tables each): run it with {how}"
+        )
     return "layout", (
         f"table made for {_fmt_layout(theirs.layout)}, this run uses "
         f"{_fmt_layout(mine.layout)}{_profile_hint(table)}"

@@ -358,6 +358,7 @@ def train(
     fsync: str = "second",
     tensorboard: str | Path | None = None,
     shared_arena: bool = False,
+    own_tables: bool = False,
 ) -> TrainResult:
     """Train ``robots`` robots for ``episodes`` more episodes into one table (``koolio-pm
     train --episodes N`` is the total the table reaches: it passes N minus the episodes
@@ -368,7 +369,9 @@ def train(
     **Robots.** Each robot runs its own episodes in its own copy of the arena (``env`` is
     robot 0's; the others are its siblings), or with ``shared_arena`` all in one arena as
     bodies to each other (robots like ``env``: :mod:`koolio_pymunk.task.shared_arena`), and
-    learns into the shared table; the robots
+    learns into the shared table (with ``own_tables``, ``--tables each``, each robot into
+    its own rows of it: the table's layout leads with the robot's index,
+    :func:`~koolio_pymunk.store.keyword.own_tables`; a shared arena only); the robots
     step in tick order (:class:`~koolio_pymunk.learning.episodes.Robots`). Episode starts
     are numbered from the table's count in the order they begin (robot order at first,
     then as robots finish), and a start's number gives its seeds and its epsilon; finished
@@ -424,7 +427,9 @@ def train(
             )
         )
     store.fsync = fsync
-    run = RunIdentity.of_run(env)  # what the run's files are checked against
+    if own_tables and not shared_arena:
+        raise ValueError("own tables: robots that share an arena (shared_arena)")
+    run = RunIdentity.of_run(env, robots if own_tables else 0)  # what the files are checked against
     checker = None
     if eval_every:
         checker = PeriodicCheck.open(run, store, log_path, eval_every, eval_episodes, seed,

@@ -90,6 +90,47 @@ class KeywordLayout(Layout):
         }
 
 
+#: The leading state field of a table that holds each robot's own rows (``train --tables
+#: each``): the robot's index, so that no row is shared.
+ROBOT_FIELD = "Robot"
+
+
+def own_tables(layout: KeywordLayout, robots: int) -> KeywordLayout:
+    """``layout`` with :data:`ROBOT_FIELD` of ``robots`` levels first (most significant):
+    the layout of a table holding ``robots`` robots' own tables, robot ``k``'s rows those
+    whose state key is its own key plus :func:`robot_offset` ``(layout, k)``.
+
+    >>> lay = own_tables(KeywordLayout((("A", 3), ("B", 4))), 4)
+    >>> lay.fields, lay.state_key((2, 1, 3)) == robot_offset(lay, 2) + (1 << 2 | 3)
+    ((('Robot', 4), ('A', 3), ('B', 4)), True)
+    >>> table_robots(lay), table_robots(base_layout(lay)), base_layout(lay).fields
+    (4, 0, (('A', 3), ('B', 4)))
+    """
+    return KeywordLayout(((ROBOT_FIELD, robots),) + layout.fields, layout.n_actions)
+
+
+def table_robots(layout: KeywordLayout) -> int:
+    """How many robots' own tables a table of ``layout`` holds (0: one table all share)."""
+    if layout.fields and layout.fields[0][0] == ROBOT_FIELD:
+        return layout.fields[0][1]
+    return 0
+
+
+def base_layout(layout: KeywordLayout) -> KeywordLayout:
+    """The layout of one robot's rows (``layout`` without :data:`ROBOT_FIELD`)."""
+    if not table_robots(layout):
+        return layout
+    return KeywordLayout(layout.fields[1:], layout.n_actions)
+
+
+def robot_offset(layout: KeywordLayout, robot: int) -> int:
+    """What robot ``robot``'s state keys add in a table of ``layout`` (0 when the robots
+    share one table): its index shifted above the other state fields."""
+    if not table_robots(layout):
+        return 0
+    return robot << sum(layout.bits[1:])
+
+
 #: Codes of the sonar intervals (Table 6) and camera intervals (Table 7).
 SONAR_LEVELS = ("Bump", "Close", "Medium", "Far")
 

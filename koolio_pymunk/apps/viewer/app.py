@@ -262,9 +262,9 @@ def run(args: argparse.Namespace) -> int:
     greedy = args.greedy or (existed and not args.learn)
     if greedy:  # what can be refused is refused before anything is compiled or written
         # and, as eval, a table of no episodes or of another world is said so
-        watched_table(env, args.qtable, warn=False)
-    else:
-        RunFiles.check(RunIdentity.of_run(env), store, args.log)
+        watched_table(env, args.qtable, warn=False, robots=args.robots)
+    else:  # a table that holds each robot's own rows is learned as train --tables each
+        RunFiles.check(RunIdentity.of_robots(env, args.robots, store.peek()), store, args.log)
     announce_compile(env)
     shared = {"robots": args.robots} if args.shared_arena else {}
     session = (SharedSession if shared else Session)(

@@ -108,17 +108,19 @@ def read_history(path: str | Path) -> tuple[list[float], list[bool]]:
     return out, goal
 
 
-def watched_table(env: KoolioEnv, qtable: str | Path, warn: bool = True) -> QTable:
-    """The table a greedy session watches, checked for ``env`` (purpose ``watch`` of
-    :func:`~koolio_pymunk.learning.run_identity.check`); its backup when the file is
-    damaged or missing, with a warning unless not ``warn``, as ``train`` and ``eval`` read
-    it."""
+def watched_table(env: KoolioEnv, qtable: str | Path, warn: bool = True, robots: int = 1) -> QTable:
+    """The table a greedy session of ``robots`` robots watches, checked for ``env``
+    (purpose ``watch`` of :func:`~koolio_pymunk.learning.run_identity.check`, as
+    :meth:`RunIdentity.of_robots <koolio_pymunk.learning.run_identity.RunIdentity.of_robots>`
+    plays it); its backup when the file is damaged or missing, with a warning unless not
+    ``warn``, as ``train`` and ``eval`` read it."""
     table = QTableStore(qtable).peek(warn=warn)
     if table is None:
         raise KoolioError(
             located(str(qtable), "", "no such Q-table file (--greedy): run koolio-pm train first")
         )
-    run_identity.check(table, env, "watch", str(qtable))  # its warnings once per process
+    run = run_identity.RunIdentity.of_robots(env, robots, table)
+    run_identity.check(table, run, "watch", str(qtable))  # its warnings once per process
     return table
 
 
@@ -147,12 +149,12 @@ class Session:
         self.files: RunFiles | None = None
         if self.learn:  # the table and the log locked while the window learns
             store = QTableStore(qtable, purpose="koolio-pm view")
-            run = run_identity.RunIdentity.of_run(env)
+            run = run_identity.RunIdentity.of_robots(env, self.asked_robots, store.peek())
             self.files = RunFiles.open(run, store, log, "koolio-pm view", seed)
             self.table = self.files.table
             self.first = self.files.first
         else:
-            self.table = watched_table(env, qtable)
+            self.table = watched_table(env, qtable, robots=self.asked_robots)
             self.first = 0
         self._make_loop(self.learn)
         self.stats = Stats()
@@ -170,8 +172,9 @@ class Session:
         # --episodes 0``): an env that was never reset has no reading to draw.
         self._begin()
 
-    n_robots = 1
-    """Robots in the window (:class:`SharedSession`: several)."""
+    n_robots = asked_robots = 1
+    """Robots in the window (:class:`SharedSession`: several), and how many were asked
+    for (the window runs no more robots than episodes)."""
     selected = 0
     """The robot the panels show."""
 
@@ -315,7 +318,7 @@ class SharedSession(Session):
         if robots < 2:
             raise ValueError("a shared arena's session needs at least two robots")
         n = robots if not episodes else max(1, min(robots, episodes))  # train's count
-        self.n_robots = n
+        self.n_robots, self.asked_robots = n, robots
         self.envs = SharedArena.of(env, n)
         self.selected = 0
         self.started = 0
