@@ -579,6 +579,8 @@ def eval_command(args: argparse.Namespace) -> str:
             words.append(f"--{flag} {getattr(args, flag)}")
     if args.goal:
         words.append("--goal " + ("all" if args.goal == "random" else args.goal))
+    if getattr(args, "shared_arena", False):  # the robots scored as they learned: together
+        words.append(f"--robots {args.robots} --shared-arena")
     return " ".join(words)
 
 
