@@ -70,12 +70,16 @@ def test_train_eval_export_and_view_a_table_of_own_rows(here, capsys) -> None:
     and ``view`` play it with as many robots in the arena; ``export --robot K`` writes
     robot K's rows as one robot's table, which eval scores alone; ``info`` says so."""
     argv = ["train", "--robots", "3", "--shared-arena", "--tables", "each", "--episodes", "12"]
-    code, out, _ = run(capsys, *argv, "--config", "tiny.yaml")
+    checks = ["--eval-every", "6", "--eval-episodes", "3"]
+    code, out, _ = run(capsys, *argv, *checks, "--config", "tiny.yaml")
     assert code == 0
     assert "koolio-pm eval --config tiny.yaml --robots 3 --shared-arena" in out  # how to score it
     table = load_qtable(here / "runs" / "hallway.qtable")
     assert table.layout.fields[0] == ("Robot", 3) and table_robots(table.layout) == 3
     assert {_robot_of(table.layout, key) for key in table.rows} == {0, 1, 2}
+    best = load_qtable(here / "runs" / "hallway.best.qtable")  # checked with its 3 robots
+    assert best.layout == table.layout and best.meta["best"]["episode"] in (6, 12)
+    assert "check at episode 12: goal rate" in out
     eval_argv = ["eval", "--robots", "3", "--shared-arena", "--episodes", "6", "--config",
                  "tiny.yaml"]  # fmt: skip
     code, out, _ = run(capsys, *eval_argv)
