@@ -34,7 +34,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 from ...learning import run_identity
 from ...learning.algorithms import make_learner
@@ -327,32 +326,18 @@ class SharedSession(Session):
         """Each robot's own totals."""
         self.robot_episodes = [0] * n
         """How many episodes each robot has begun in this window."""
-        super().__init__(env, qtable, seed=seed, episodes=episodes, log=log, greedy=greedy)
+        # robot 0's env is the session's env (it is like ``env``: the same arena,
+        # configuration, world and goal); :meth:`select` makes another robot's the one shown
+        super().__init__(self.envs[0], qtable, seed=seed, episodes=episodes, log=log, greedy=greedy)
 
     # -- the robots -----------------------------------------------------------------------
-    @property  # type: ignore[override]
-    def env(self) -> KoolioEnv:
-        """The selected robot's env."""
-        return self.envs[self.selected]
-
-    @env.setter
-    def env(self, value: KoolioEnv) -> None:  # Session.__init__'s: the robots' own instead
-        pass
-
-    @property  # type: ignore[override]
-    def agent(self) -> Any:
-        """The selected robot's learner."""
-        return self.agents[self.selected]
-
-    @agent.setter
-    def agent(self, value: Any) -> None:
-        pass
-
     def select(self, robot: int) -> None:
-        """Show robot ``robot`` (0 .. n-1) in the panels."""
+        """Show robot ``robot`` (0 .. n-1) in the panels: :attr:`env` and :attr:`agent`
+        are its own."""
         if not 0 <= robot < self.n_robots:
             raise ValueError(f"no robot {robot} (robots 0..{self.n_robots - 1})")
         self.selected = robot
+        self.env, self.agent = self.envs[robot], self.agents[robot]
 
     def _make_loop(self, learn: bool) -> None:
         cfg = self.envs[0].config
@@ -367,6 +352,7 @@ class SharedSession(Session):
             self.robots = Robots(
                 self.envs, self.agents, self.seed, EVAL_STREAM, learn=False, epsilon=0.0
             )
+        self.agent = self.agents[self.selected]
 
     # -- stepping ------------------------------------------------------------------------
     def _begin(self) -> None:
