@@ -159,8 +159,8 @@ class QTable:
     def robot_table(self, robot: int) -> QTable:
         """Robot ``robot``'s own rows of a table that holds each robot's (``train --tables
         each``), as a table of one robot (the keyword without the robot field; its header
-        this table's, with ``robot``: ``{"index", "of"}``). ``ValueError`` when the table
-        holds no such robot's rows, or data sections (Dyna-Q's model is not split).
+        this table's, with ``robot``: ``{"index", "of"}``; Dyna-Q's model, the pairs of
+        the robot's own states). ``ValueError`` when the table holds no such robot's rows.
 
         >>> from koolio_pymunk.store.keyword import own_tables
         >>> t = QTable(own_tables(KeywordLayout((("A", 3),)), 2))
@@ -173,15 +173,22 @@ class QTable:
         if not 0 <= robot < own:
             held = f"the rows of robots 0..{own - 1}" if own else "no robot's own rows"
             raise ValueError(f"no robot {robot}'s own rows: the table holds {held}")
-        if self.sections:
-            names = ", ".join(sorted(self.sections))
-            raise ValueError(f"data sections ({names}) are not split by robot")
+        others = sorted(set(self.sections) - {SECTION})
+        if others:
+            raise ValueError(f"data sections ({', '.join(others)}) are not split by robot")
         base = base_layout(self.layout)
         low = robot_offset(self.layout, 1) - 1
         mine = robot_offset(self.layout, robot)
         rows = {k & low: list(v) for k, v in self.rows.items() if k & ~low == mine}
         meta = dict(self.meta) | {"robot": {"index": robot, "of": own}}
-        return QTable(base, meta, self.q_init, rows)
+        sections = {}
+        if SECTION in self.sections:  # a robot's transitions stay among its own states
+            model, its = Model.from_bytes(bytes(self.sections[SECTION])), Model()
+            for (state, action), outs in zip(model.pairs, model.outcomes):
+                if state & ~low == mine:
+                    its.add(state & low, action, [[o[0] & low, *o[1:]] for o in outs])
+            sections[SECTION] = bytes(its)
+        return QTable(base, meta, self.q_init, rows, sections)
 
     # -- bytes ----------------------------------------------------------------------
     def to_bytes(self) -> bytes:
