@@ -182,9 +182,18 @@ def check_shared_arena(args: argparse.Namespace, env) -> None:
         raise KoolioError(
             "--shared-arena: needs --robots N with N >= 2 (the robots that share the arena)"
         )
+    from ..store.keyword import MAX_KEYWORD_BITS, own_tables
     from ..task.shared_arena import SharedArena
 
     SharedArena(env.arena, env.config, args.robots)  # the start areas hold the robots
+    if getattr(args, "tables", "shared") == "each":
+        layout = own_tables(env.layout, args.robots)
+        if layout.total_bits > MAX_KEYWORD_BITS:
+            raise KoolioError(
+                f"--tables each: the keyword with the robot's index ({args.robots} robots: "
+                f"{layout.bits[0]} bits) would need {layout.total_bits} bits; it must fit "
+                f"{MAX_KEYWORD_BITS}: fewer robots or sensors, or --tables shared"
+            )
 
 
 def resolve_files(args: argparse.Namespace) -> None:

@@ -106,7 +106,10 @@ def own_tables(layout: KeywordLayout, robots: int) -> KeywordLayout:
     >>> table_robots(lay), table_robots(base_layout(lay)), base_layout(lay).fields
     (4, 0, (('A', 3), ('B', 4)))
     """
-    return KeywordLayout(((ROBOT_FIELD, robots),) + layout.fields, layout.n_actions)
+    own = KeywordLayout(((ROBOT_FIELD, robots),) + layout.fields, layout.n_actions)
+    if own.total_bits > MAX_KEYWORD_BITS:
+        raise ValueError(f"{robots} robots' own rows need a {own.total_bits}-bit keyword")
+    return own
 
 
 def table_robots(layout: KeywordLayout) -> int:

@@ -136,6 +136,14 @@ def test_a_table_of_own_rows_used_otherwise_is_one_line(here, capsys, argv, word
     expect_error(capsys, here, [*argv, "--config", "tiny.yaml"], *words)
 
 
+def test_own_rows_whose_keyword_would_not_fit_64_bits_are_one_line(here, capsys) -> None:
+    """12 cameras make a 63-bit keyword; 4 robots' index needs 2 more bits."""
+    cams = ", ".join(["0.0"] * 12)
+    (here / "wide.yaml").write_text(f"sensors: {{camera: {{camera_sensors_deg: [{cams}]}}}}\n")
+    argv = ["train", "--robots", "4", "--shared-arena", "--tables", "each", "--config", "wide.yaml"]
+    expect_error(capsys, here, argv, "--tables each", "would need 65 bits", "must fit 64")
+
+
 def test_a_shared_table_is_not_resumed_as_own_rows(here, capsys) -> None:
     shared = ["train", "--robots", "3", "--shared-arena", "--episodes", "6", "--quiet"]
     assert run(capsys, *shared, "--config", "tiny.yaml")[0] == 0
