@@ -182,17 +182,18 @@ def check_shared_arena(args: argparse.Namespace, env) -> None:
         raise KoolioError(
             "--shared-arena: needs --robots N with N >= 2 (the robots that share the arena)"
         )
-    from ..store.keyword import MAX_KEYWORD_BITS, own_tables
+    from ..store.keyword import MAX_KEYWORD_BITS, ROBOT_FIELD, KeywordLayout
     from ..task.shared_arena import SharedArena
 
     SharedArena(env.arena, env.config, args.robots)  # the start areas hold the robots
     if getattr(args, "tables", "shared") == "each":
-        layout = own_tables(env.layout, args.robots)
-        if layout.total_bits > MAX_KEYWORD_BITS:
+        bits = KeywordLayout(((ROBOT_FIELD, args.robots),)).bits[0]
+        need = env.layout.total_bits + bits
+        if need > MAX_KEYWORD_BITS:
             raise KoolioError(
                 f"--tables each: the keyword with the robot's index ({args.robots} robots: "
-                f"{layout.bits[0]} bits) would need {layout.total_bits} bits; it must fit "
-                f"{MAX_KEYWORD_BITS}: fewer robots or sensors, or --tables shared"
+                f"{bits} bits) would need {need} bits; it must fit {MAX_KEYWORD_BITS}: fewer "
+                "robots or sensors, or --tables shared"
             )
 
 
