@@ -1093,7 +1093,7 @@ def announce_compile(env, robots: int = 1, training: bool = False) -> None:
     when it is due."""
     if kernels_to_compile(env, robots, training):
         print(
-            "compiling the simulator's kernels (first run only, about 20 s on 2 cores); "
+            "compiling the simulator's kernels (first run only, about a minute on 2 cores); "
             "later runs load them from the cache",
             file=sys.stderr,
             flush=True,

@@ -10,7 +10,7 @@ its old machine code and compute the old readings.
 :func:`refresh` guards against that: it hashes the source of every module of the package
 that uses numba and, when the hash is not the one stored beside the cache
 (``__pycache__/kernels.sha256`` at the package's top), deletes the package's cached
-kernels (``*.nbi``, ``*.nbc``), so numba compiles them again (about 20 seconds, once).
+kernels (``*.nbi``, ``*.nbc``), so numba compiles them again (about a minute on 2 cores, once).
 Every kernel module calls it at import, before any kernel runs; it does its work once
 per process. A package folder it cannot write (an installed, read-only package: its
 files change only by a reinstall, which gives every file a new stamp) is left alone.

@@ -298,7 +298,7 @@ def test_the_compile_is_announced_before_it_happens_when_the_cache_is_cold(
     code, _, err = run(capsys, "train", *ROOM, "--episodes", "1")
     assert code == 0
     assert err.splitlines() == [
-        "compiling the simulator's kernels (first run only, about 20 s on 2 cores); "
+        "compiling the simulator's kernels (first run only, about a minute on 2 cores); "
         "later runs load them from the cache"
     ]
     monkeypatch.setattr(cli, "_cached", lambda dispatcher: True)  # warm
