@@ -627,18 +627,6 @@ def _algorithm_of(table: QTable, source: str) -> dict[str, Any] | None:
     return rec
 
 
-def table_algorithm(table: QTable, source: str) -> str:
-    """The algorithm a table was learned with (``q`` when its header names none)."""
-    rec = _algorithm_of(table, source)
-    return "q" if rec is None else str(rec["name"])
-
-
-def table_rule(table: QTable) -> bool:
-    """Whether ``table`` was learned with the no-undo rule."""
-    rec = table.meta.get("algorithm")
-    return isinstance(rec, dict) and rec.get("no_undo") is True
-
-
 # -- the sensors, the goal, the world ---------------------------------------------------------
 
 

@@ -157,13 +157,13 @@ def test_many_robots_learn_under_the_rule(tmp_path, capsys) -> None:
     engine); the table records it."""
     from koolio_pymunk.apps.cli import main
     from koolio_pymunk.learning.qtable import load_qtable
-    from koolio_pymunk.learning.run_identity import table_rule
+    from koolio_pymunk.learning.run_identity import RunIdentity
 
     cfg = tmp_path / "n.yaml"
     cfg.write_text("learner: {no_undo: true}\n")
     argv = ["train", "--arena", "room", "--config", str(cfg), "--robots", "2", "--episodes", "3"]
     assert main([*argv, "--qtable", str(tmp_path / "t.qtable"), "--quiet"]) == 0
-    assert table_rule(load_qtable(tmp_path / "t.qtable"))
+    assert RunIdentity.of_table(load_qtable(tmp_path / "t.qtable"), "t.qtable").no_undo
 
 
 def test_a_table_is_read_only_under_the_rule_it_was_learned_with(tmp_path, capsys) -> None:

@@ -271,7 +271,7 @@ def test_a_number_json_reads_as_infinity_is_refused_everywhere(tmp_path):
 
 def test_an_algorithm_that_is_not_a_name_is_refused():
     """Found by the fuzzer: a list as the algorithm's name was a TypeError (unhashable)."""
-    from koolio_pymunk.learning.run_identity import table_algorithm
+    from koolio_pymunk.learning.run_identity import RunIdentity
 
     doc = dyna_policy(None)
     doc["learner"]["algorithm"] = ["dyna"]
@@ -280,4 +280,4 @@ def test_an_algorithm_that_is_not_a_name_is_refused():
     table = small_table()
     table.meta["algorithm"] = {"name": ["dyna"]}
     with pytest.raises(QTableError, match="algorithm: unknown learning algorithm"):
-        table_algorithm(table, "t.qtable")
+        RunIdentity.of_table(table, "t.qtable")
