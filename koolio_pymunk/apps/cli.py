@@ -183,19 +183,17 @@ def check_shared_arena(args: argparse.Namespace, env) -> None:
         raise KoolioError(
             "--shared-arena: needs --robots N with N >= 2 (the robots that share the arena)"
         )
-    from ..store.keyword import MAX_KEYWORD_BITS, ROBOT_FIELD, KeywordLayout
+    from ..store.keyword import own_tables
     from ..task.shared_arena import SharedArena
 
     SharedArena(env.arena, env.config, args.robots)  # the start areas hold the robots
     if getattr(args, "tables", "shared") == "each":
-        bits = KeywordLayout(((ROBOT_FIELD, args.robots),)).bits[0]
-        need = env.layout.total_bits + bits
-        if need > MAX_KEYWORD_BITS:
+        try:
+            own_tables(env.layout, args.robots)
+        except ValueError as e:
             raise KoolioError(
-                f"--tables each: the keyword with the robot's index ({args.robots} robots: "
-                f"{bits} bits) would need {need} bits; it must fit {MAX_KEYWORD_BITS}: fewer "
-                "robots or sensors, or --tables shared"
-            )
+                f"--tables each: {e}: fewer robots or sensors, or --tables shared"
+            ) from None
 
 
 def resolve_files(args: argparse.Namespace) -> None:

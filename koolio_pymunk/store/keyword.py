@@ -108,7 +108,10 @@ def own_tables(layout: KeywordLayout, robots: int) -> KeywordLayout:
     """
     own = KeywordLayout(((ROBOT_FIELD, robots),) + layout.fields, layout.n_actions)
     if own.total_bits > MAX_KEYWORD_BITS:
-        raise ValueError(f"{robots} robots' own rows need a {own.total_bits}-bit keyword")
+        raise ValueError(
+            f"the keyword with the robot's index ({robots} robots: {own.bits[0]} bits) would "
+            f"need {own.total_bits} bits; it must fit {MAX_KEYWORD_BITS}"
+        )
     return own
 
 
