@@ -14,11 +14,11 @@ from pathlib import Path
 import pytest
 
 from koolio_pymunk.apps import cli
-from koolio_pymunk.learning import run_identity
-from koolio_pymunk.learning.qtable import MAGIC, QTable, QTableStore
-from koolio_pymunk.learning.run_identity import RunIdentity, sensor_signature
+from koolio_pymunk.store import run_identity
 from koolio_pymunk.store.config import Config, state_fields
 from koolio_pymunk.store.keyword import KeywordLayout
+from koolio_pymunk.store.qtable import MAGIC, QTable, QTableStore
+from koolio_pymunk.store.run_identity import RunIdentity, sensor_signature
 from koolio_pymunk.world.arena import arena_record, load_arena
 
 ROOM = load_arena("room")
@@ -96,10 +96,10 @@ def open_table(
 
 def learned(path: str | Path) -> tuple[str | None, str]:
     """The run id of the table at ``path`` and a hash of what it learned
-    (:func:`~koolio_pymunk.learning.run_identity.learned_digest`): equal for two tables of
+    (:func:`~koolio_pymunk.store.run_identity.learned_digest`): equal for two tables of
     the same seeded run made under other command lines (whose files differ in the
     provenance they record)."""
-    from koolio_pymunk.learning.qtable import load_qtable
+    from koolio_pymunk.store.qtable import load_qtable
 
     table = load_qtable(path)
     return table.meta.get("run_id"), run_identity.learned_digest(table)

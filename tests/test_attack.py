@@ -25,11 +25,11 @@ from inputs import edit_header, expect_error, open_table
 
 from koolio_pymunk import robot_runtime as rt
 from koolio_pymunk.apps import cli
-from koolio_pymunk.learning.qtable import QTableStore, load_qtable
 from koolio_pymunk.store import files as files_mod
 from koolio_pymunk.store.episode_log import log_rows
 from koolio_pymunk.store.errors import InUseError
 from koolio_pymunk.store.locks import FileLock
+from koolio_pymunk.store.qtable import QTableStore, load_qtable
 
 TINY = "episode: {max_steps: 30}\n"
 ROOT = Path(__file__).resolve().parents[1]
@@ -262,9 +262,9 @@ def test_discard_takes_back_only_the_unfinished_writes():
     wrote over them since; rows only the discarded episodes created are dropped."""
     import numpy as np
 
-    from koolio_pymunk.learning.qtable import QTable
     from koolio_pymunk.learning.table_kernel import SharedTable, new_journal, undo_writes, update
     from koolio_pymunk.store.keyword import KeywordLayout
+    from koolio_pymunk.store.qtable import QTable
 
     table = QTable(KeywordLayout((("A", 8),)), q_init=-1.0)
     table.row(1)[:] = [0.0] * 5
@@ -386,7 +386,7 @@ def test_disk_full_during_training_stops_with_the_last_good_table(work, capsys, 
     if mode == "episode":
         assert load_qtable(work / "q.qtable.bak").meta["episodes"] == table.meta["episodes"] - 1
     else:  # the snapshot as it was, and the journal's records after it
-        from koolio_pymunk.learning.qtable import QTable
+        from koolio_pymunk.store.qtable import QTable
 
         snapshot = QTable.from_bytes((work / "q.qtable").read_bytes())
         assert snapshot.meta["episodes"] == good and (work / "q.qtable.journal").exists()

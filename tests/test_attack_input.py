@@ -24,9 +24,9 @@ from koolio_pymunk import robot_runtime as rt
 from koolio_pymunk.apps import cli
 from koolio_pymunk.apps.export import policy_document, write_policy
 from koolio_pymunk.apps.sweep import load_spec
-from koolio_pymunk.learning.qtable import QTable
 from koolio_pymunk.store.config import Config, apply_world
 from koolio_pymunk.store.errors import ArenaError, KoolioError
+from koolio_pymunk.store.qtable import QTable
 from koolio_pymunk.world.arena import (
     MAX_ENTRIES,
     MAX_POLYGON_POINTS,

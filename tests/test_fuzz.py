@@ -32,9 +32,9 @@ from inputs import header_of, small_table, with_header
 
 from koolio_pymunk import robot_runtime as rt
 from koolio_pymunk.apps.export import load_any_table, policy_document
-from koolio_pymunk.learning.qtable import QTable
 from koolio_pymunk.store.config import Config, apply_world, load_config
 from koolio_pymunk.store.errors import KoolioError
+from koolio_pymunk.store.qtable import QTable
 from koolio_pymunk.world.arena import load_arena
 
 REPO = Path(__file__).resolve().parent.parent

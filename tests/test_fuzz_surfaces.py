@@ -42,11 +42,11 @@ from koolio_pymunk import robot_runtime as rt
 from koolio_pymunk.apps import cli
 from koolio_pymunk.apps.export import policy_document
 from koolio_pymunk.learning.dyna import DynaQ
-from koolio_pymunk.learning.dyna_model import SECTION, Model
-from koolio_pymunk.learning.qtable import QTable, load_qtable
 from koolio_pymunk.store.config import Config, LearnerConfig, apply_world
+from koolio_pymunk.store.dyna_model import SECTION, Model
 from koolio_pymunk.store.episode_log import log_rows
 from koolio_pymunk.store.errors import KoolioError
+from koolio_pymunk.store.qtable import QTable, load_qtable
 
 ROOT = Path(__file__).resolve().parent.parent
 CASES = int(os.environ.get("KOOLIO_FUZZ_CASES", "40"))
@@ -243,7 +243,7 @@ def _section_as_json(data: bytes) -> dict | None:
 def _learn_and_reload(table: QTable, rng: random.Random, label: str) -> None:
     """A loaded model learns and saves a table that loads again (it never poisons it)."""
     cfg = LearnerConfig(algorithm="dyna", planning_steps=5)
-    agent = DynaQ(table, cfg, np.random.default_rng(rng.randrange(1000)), "t.qtable")
+    agent = DynaQ(table, cfg, np.random.default_rng(rng.randrange(1000)))
     agent.begin_episode(0, np.random.default_rng(1))
     for _ in range(20):
         s, s2 = rng.choice(STATES), rng.choice(STATES)

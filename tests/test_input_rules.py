@@ -12,12 +12,12 @@ from inputs import small_table
 
 from koolio_pymunk.apps import cli
 from koolio_pymunk.apps.export import check_sensor_signature
-from koolio_pymunk.learning.qtable import QTable, load_qtable
-from koolio_pymunk.learning.run_identity import sensor_signature
 from koolio_pymunk.robot_runtime import field_bits
 from koolio_pymunk.store.config import LIMITS, MAX_CONFIG_BYTES, MAX_NUMBER, config_from_dict
 from koolio_pymunk.store.errors import ConfigError
 from koolio_pymunk.store.keyword import MAX_KEYWORD_BITS, KeywordLayout
+from koolio_pymunk.store.qtable import QTable, load_qtable
+from koolio_pymunk.store.run_identity import sensor_signature
 from koolio_pymunk.store.yamlfile import MAX_DEPTH, dump_yaml, parse_yaml, read_yaml
 
 

@@ -16,8 +16,6 @@ from koolio_pymunk import robot_runtime as rt
 from koolio_pymunk.apps.export import policy_document, write_policy
 from koolio_pymunk.learning.episodes import EpisodeResult
 from koolio_pymunk.learning.qlearning import QLearner
-from koolio_pymunk.learning.qtable import QTable
-from koolio_pymunk.learning.run_identity import sensor_signature
 from koolio_pymunk.store.config import (
     Config,
     LearnerConfig,
@@ -27,6 +25,8 @@ from koolio_pymunk.store.config import (
 )
 from koolio_pymunk.store.episode_log import LOG_FIELDS, LogWriter
 from koolio_pymunk.store.keyword import KeywordLayout
+from koolio_pymunk.store.qtable import QTable
+from koolio_pymunk.store.run_identity import sensor_signature
 from koolio_pymunk.task.rules import judge
 
 RUNTIME = Path(rt.__file__)

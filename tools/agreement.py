@@ -115,9 +115,9 @@ def _side(
     (``shared``: the robots in one arena; ``own_tables``: each robot its own rows)."""
     from koolio_pymunk.learning.algorithms import make_learner
     from koolio_pymunk.learning.engine import robots as make_robots
-    from koolio_pymunk.learning.qtable import QTable
     from koolio_pymunk.store.config import load_config
     from koolio_pymunk.store.keyword import own_tables as own_layout
+    from koolio_pymunk.store.qtable import QTable
     from koolio_pymunk.task.env import KoolioEnv
     from koolio_pymunk.task.shared_arena import SharedArena
 

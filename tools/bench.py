@@ -143,7 +143,7 @@ def learning_loop(
     configuration allows, as ``train``); ``profiler`` runs during the timed steps."""
     from koolio_pymunk.learning.algorithms import make_learner
     from koolio_pymunk.learning.engine import robots
-    from koolio_pymunk.learning.qtable import QTable
+    from koolio_pymunk.store.qtable import QTable
 
     def loop_of(env):
         table = QTable(env.layout, {}, env.config.learner.q_init)
@@ -217,8 +217,8 @@ def end_to_end(
 ) -> dict:
     """``koolio-pm train`` end to end, one robot (the table, its journal or backup, the
     log): steps per second."""
-    from koolio_pymunk.learning.qtable import QTableStore
     from koolio_pymunk.learning.training import train
+    from koolio_pymunk.store.qtable import QTableStore
 
     env = make_env("fast", config=config)
     name = f"e2e-{fsync}-{save_every}-{config}"
@@ -268,9 +268,9 @@ def many(
     """``koolio-pm train --robots N`` end to end (the table saved every N episodes, the
     log): robot-steps per second; ``profiler`` runs during the timed run; ``shared``: the
     robots share one hallway (``--shared-arena``, start spots within 200 in)."""
-    from koolio_pymunk.learning.qtable import QTableStore
     from koolio_pymunk.learning.training import train
     from koolio_pymunk.store.config import load_config
+    from koolio_pymunk.store.qtable import QTableStore
     from koolio_pymunk.task.env import KoolioEnv
 
     over = {"shared": {"start_spread": 200}} if shared else None
@@ -345,8 +345,9 @@ def many_where(robots: int, episodes: int, folder: Path, config: str | None = No
     generator states, one for the env and one for the learner, the env's reset and the
     load into the arrays; the log row and the save), µs per robot-step and per episode."""
     from koolio_pymunk.learning import engine, training
-    from koolio_pymunk.learning.qtable import QTableStore
+    from koolio_pymunk.store import run_files
     from koolio_pymunk.store.config import load_config
+    from koolio_pymunk.store.qtable import QTableStore
     from koolio_pymunk.task import batch
     from koolio_pymunk.task.env import KoolioEnv
 
@@ -363,7 +364,7 @@ def many_where(robots: int, episodes: int, folder: Path, config: str | None = No
         (KoolioEnv, "reset_key", "  env reset (KoolioEnv.reset_key)"),
         (batch.EnvBatch, "load", "  load into the arrays (EnvBatch.load)"),
         (engine.Engine, "result", "episode row (Engine.result)"),
-        (training.RunFiles, "finished", "log row and saves (RunFiles.finished)"),
+        (run_files.RunFiles, "finished", "log row and saves (RunFiles.finished)"),
     ]
     with CpuTimers(parts) as timers, Timer() as t:
         res = train(
@@ -435,8 +436,8 @@ def evaluation_rows(folder: Path, episodes: int, python_episodes: int, robots: i
     """``evaluate`` (greedy) of a table trained by default ``train`` for 300 episodes
     (seed 0): on the engine with one robot, with ``robots``, and in the Python loop."""
     from koolio_pymunk.learning.evaluation import evaluate
-    from koolio_pymunk.learning.qtable import QTableStore
     from koolio_pymunk.learning.training import train
+    from koolio_pymunk.store.qtable import QTableStore
     from koolio_pymunk.task.env import KoolioEnv
 
     table = train(
@@ -471,8 +472,8 @@ def check_share(folder: Path, episodes: int, every: int) -> dict:
     time in the checks (``PeriodicCheck.check``: the greedy evaluation of 100 episodes,
     keeping the best table, the evaluations file's row) against the whole run."""
     from koolio_pymunk.learning.evaluation import PeriodicCheck
-    from koolio_pymunk.learning.qtable import QTableStore
     from koolio_pymunk.learning.training import train
+    from koolio_pymunk.store.qtable import QTableStore
     from koolio_pymunk.task.env import KoolioEnv
 
     label = "checks"
@@ -703,9 +704,9 @@ def step_costs(
 
     from koolio_pymunk.learning.algorithms import make_learner
     from koolio_pymunk.learning.episodes import Episodes
-    from koolio_pymunk.learning.qtable import QTable
     from koolio_pymunk.learning.table_kernel import SharedTable, choose, new_journal, update
     from koolio_pymunk.sensing.reading_kernel import reading_group, sense_reading
+    from koolio_pymunk.store.qtable import QTable
     from koolio_pymunk.world.segment_query import wall_array
     from koolio_pymunk.world.swept_move import act
 
@@ -893,8 +894,8 @@ def competence(
     """``train`` (``config``; None: the default learner) until 90 % of greedy evaluation
     episodes reach the goal, a check every ``check_every`` episodes."""
     from koolio_pymunk.learning.evaluation import evaluate
-    from koolio_pymunk.learning.qtable import QTableStore, human_bytes
     from koolio_pymunk.learning.training import train
+    from koolio_pymunk.store.qtable import QTableStore, human_bytes
 
     env = make_env("fast", config=config)
     tag = f"{config or 'default'}-seed{seed}"

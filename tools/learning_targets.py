@@ -77,10 +77,11 @@ def overrides_of(pairs: list[str]) -> dict[str, Any]:
 
 def run_job(job: dict[str, Any]) -> dict[str, Any]:
     """Train one seed with periodic greedy evaluations (see the module doc)."""
-    from koolio_pymunk.learning.evaluation import best_path, evaluate
-    from koolio_pymunk.learning.qtable import QTableStore, load_qtable
+    from koolio_pymunk.learning.evaluation import evaluate
     from koolio_pymunk.learning.training import train
+    from koolio_pymunk.store.check_files import best_path
     from koolio_pymunk.store.config import load_config
+    from koolio_pymunk.store.qtable import QTableStore, load_qtable
     from koolio_pymunk.task.env import KoolioEnv
 
     cfg = load_config(job["config"], overrides=job["overrides"])

@@ -56,9 +56,10 @@ def run(
 ) -> dict:
     """Target ``name``'s run of ``seed`` (module doc; ``tables`` ``each``: each robot
     learns its own rows, ``train --tables each``)."""
-    from koolio_pymunk.learning.evaluation import best_path, evaluate
-    from koolio_pymunk.learning.qtable import QTableStore
+    from koolio_pymunk.learning.evaluation import evaluate
     from koolio_pymunk.learning.training import train
+    from koolio_pymunk.store.check_files import best_path
+    from koolio_pymunk.store.qtable import QTableStore
     from koolio_pymunk.task.env import KoolioEnv
 
     robots, config, total, chunk = PLANS[name]

@@ -42,8 +42,8 @@ class Timer:
 
 
 def run_train(arena: str, episodes: int, seed: int, folder: Path) -> tuple[int, Timer, bytes]:
-    from koolio_pymunk.learning.qtable import QTableStore
     from koolio_pymunk.learning.training import train
+    from koolio_pymunk.store.qtable import QTableStore
     from koolio_pymunk.task.env import KoolioEnv
 
     env = KoolioEnv(arena)

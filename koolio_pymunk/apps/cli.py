@@ -476,9 +476,10 @@ def warn_endless(cfg) -> None:
 
 
 def cmd_train(args: argparse.Namespace) -> int:
-    from ..learning.qtable import QTableStore
-    from ..learning.run_identity import RunIdentity
-    from ..learning.training import RunFiles, train
+    from ..learning.training import train
+    from ..store.qtable import QTableStore
+    from ..store.run_files import RunFiles
+    from ..store.run_identity import RunIdentity
 
     checks = _eval_every_args(args)
     board = Path(args.tensorboard) if args.tensorboard is not None else None
@@ -764,7 +765,7 @@ def _check_init_table(init_path: str, store, log: str, run):
     """``--init-qtable``'s checks that need no lock: the table to start from is readable
     and made for the sensors of the run ``run`` (its identity), ``--qtable`` is new, and
     so is the log."""
-    from ..learning import run_identity
+    from ..store import run_identity
     from ..store.episode_log import check_log_path, log_rows
     from .export import load_any_table
 
@@ -790,7 +791,7 @@ def _seed_table(init_path: str, store, log: str, run, seed: int) -> None:
     names the table it started from. The new table's log must be new too (its episodes
     continue the other table's count). The checks of :func:`_check_init_table` are made
     again under the lock."""
-    from ..learning import run_identity
+    from ..store import run_identity
 
     store.lock()
     try:
@@ -806,8 +807,8 @@ def _seed_table(init_path: str, store, log: str, run, seed: int) -> None:
 
 
 def cmd_eval(args: argparse.Namespace) -> int:
-    from ..learning import run_identity
     from ..learning.evaluation import evaluate
+    from ..store import run_identity
 
     eps = args.epsilon
     goal_all = args.goal == "all"
@@ -879,8 +880,8 @@ def cmd_eval(args: argparse.Namespace) -> int:
 def played(env, args: argparse.Namespace, table):
     """The identity of ``eval``'s run in ``env`` with ``table`` (its robots sharing the
     arena play their own rows of a table that holds each robot's:
-    :meth:`RunIdentity.of_robots <koolio_pymunk.learning.run_identity.RunIdentity.of_robots>`)."""
-    from ..learning.run_identity import RunIdentity
+    :meth:`RunIdentity.of_robots <koolio_pymunk.store.run_identity.RunIdentity.of_robots>`)."""
+    from ..store.run_identity import RunIdentity
 
     return RunIdentity.of_robots(env, args.robots if args.shared_arena else 1, table)
 
@@ -888,7 +889,7 @@ def played(env, args: argparse.Namespace, table):
 def read_table(path: str):
     """The table ``eval`` scores: a ``.qtable`` file (its backup when it is damaged or
     missing, with one warning line, as ``train`` does) or an exported policy."""
-    from ..learning.qtable import QTableStore
+    from ..store.qtable import QTableStore
     from .export import load_any_table
 
     p = Path(path)
@@ -925,14 +926,14 @@ def _starts_with_brace(p: Path) -> bool:
 
 def _trained_for(table, env, source: str, policy: bool = False) -> str:
     """``trained for goal 311 in the ideal world``, from what the table (or policy file)
-    records (:class:`~koolio_pymunk.learning.run_identity.RunIdentity`). The goal is
+    records (:class:`~koolio_pymunk.store.run_identity.RunIdentity`). The goal is
     named by its number only when the table was learned in this arena (its name and
     content); a table of another arena names that arena and its goal
     as recorded: ``trained in arena hallway for its active goal, in the ideal world`` (a
     table records its goal only when it is not its arena's active one, and this arena's
     active goal is not that arena's)."""
-    from ..learning.run_identity import RunIdentity, describe_goal, describe_world
     from ..store.errors import shown
+    from ..store.run_identity import RunIdentity, describe_goal, describe_world
 
     theirs = RunIdentity.of_table(table, source, RunIdentity.of_run(env))
     if policy and theirs.arena is None:  # a policy from before policies recorded these
@@ -972,9 +973,9 @@ def cmd_info(args: argparse.Namespace) -> int:
     layout's keyword, and a table's figures. The layout is the configuration's (``--config``,
     or the defaults); given a table and no ``--config``, it is the table's own (its
     header's). A table that is not the configuration's says so, in ``eval``'s words."""
-    from ..learning.qtable import human_bytes
     from ..store.config import load_config, state_fields
     from ..store.keyword import PAPER_ORIGINAL_FIELDS, KeywordLayout
+    from ..store.qtable import human_bytes
     from .export import load_any_table
 
     cfg = load_config(args.config)
@@ -1009,10 +1010,10 @@ def _describe_table(table, path: str, cfg, config: str | None, shown) -> None:
     """``info``'s lines on a table: its figures (the share of its own layout's dense
     table, the file's size), where and how it was learned, and whether ``cfg`` (the
     configuration ``config`` names, or the defaults) is the one it was made with."""
-    from ..learning import run_identity
-    from ..learning.qtable import human_bytes
-    from ..learning.run_identity import RunIdentity, describe_goal, describe_world
+    from ..store import run_identity
     from ..store.keyword import own_tables, table_robots
+    from ..store.qtable import human_bytes
+    from ..store.run_identity import RunIdentity, describe_goal, describe_world
 
     share = table.entries / table.layout.n_entries
     size = os.stat(path).st_size

@@ -9,7 +9,7 @@ keeps learning that policy on the robot and saves it back in the same format.
 
 The robot's learning settings (``learner``: alpha, gamma, epsilon, and the algorithm with
 its parameters when it is not one-step Q) come from ``--config``, like the rewards: the
-configuration the table was learned with (:func:`~koolio_pymunk.learning.run_identity.check`,
+configuration the table was learned with (:func:`~koolio_pymunk.store.run_identity.check`,
 purpose ``export``: another keyword layout, sensor signature, algorithm or choice rule is
 refused, another world is said). A
 Dyna-Q model is never exported (it describes the simulated world, and the robot builds its
@@ -37,8 +37,13 @@ from pathlib import Path
 from typing import Any
 
 from .. import robot_runtime as rt
-from ..learning import run_identity
-from ..learning.qtable import (
+from ..store import run_identity
+from ..store.config import Config, load_config
+from ..store.errors import FileError, QTableError, located
+from ..store.files import atomic_write, check_path, read_bytes
+from ..store.keyword import KeywordLayout
+from ..store.locks import FileLock
+from ..store.qtable import (
     MAGIC,
     MAX_TABLE_BYTES,
     RECORD_KEYS,
@@ -46,13 +51,8 @@ from ..learning.qtable import (
     backup_path,
     with_journal,
 )
-from ..learning.run_identity import RunIdentity, algorithm_record
-from ..learning.table_journal import journal_path
-from ..store.config import Config, load_config
-from ..store.errors import FileError, QTableError, located
-from ..store.files import atomic_write, check_path, read_bytes
-from ..store.keyword import KeywordLayout
-from ..store.locks import FileLock
+from ..store.run_identity import RunIdentity, algorithm_record
+from ..store.table_journal import journal_path
 
 WRITTEN_BY = "koolio-pm export"
 
@@ -344,7 +344,7 @@ def table_from_policy(policy: rt.Policy) -> QTable:
 def load_any_table(path: str | Path) -> QTable:
     """Read a ``.qtable`` file or a koolio-policy file; QTableError (one line) if bad.
 
-    The caller checks what it is for (:func:`~koolio_pymunk.learning.run_identity.check`).
+    The caller checks what it is for (:func:`~koolio_pymunk.store.run_identity.check`).
     """
     p = check_path(path, "--qtable")
     try:

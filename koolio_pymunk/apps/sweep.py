@@ -44,7 +44,7 @@ from one checkpoint to the next);
 ``competence`` (empty: not reached) and ``competence_seconds`` the training time until
 then; ``train_*`` summarise the training episodes themselves; ``table_sha256`` identifies
 what the final Q-table learned
-(:func:`~koolio_pymunk.learning.run_identity.learned_digest`: its values and identity,
+(:func:`~koolio_pymunk.store.run_identity.learned_digest`: its values and identity,
 not its provenance, so the same run on another machine or checkout has the same one).
 ``run.json`` holds the task and its provenance (versions, commit, command line:
 :mod:`koolio_pymunk.store.provenance`).
@@ -545,11 +545,11 @@ def run_one(task: dict[str, Any]) -> dict[str, Any]:
     files. Depends only on the task (never on the process or node).
     """
     from ..learning.evaluation import evaluate
-    from ..learning.qtable import QTableStore
-    from ..learning.run_identity import learned_digest
     from ..learning.training import train
     from ..store.config import config_from_dict
     from ..store.files import read_bytes
+    from ..store.qtable import QTableStore
+    from ..store.run_identity import learned_digest
     from ..store.worlds import world_name
     from ..task.env import KoolioEnv
 
@@ -732,7 +732,7 @@ class Results:
     def save(self, order: list[str]) -> None:
         """Rewrite the file: runs in ``order`` first, then any others (none: a folder with
         another spec's runs is refused, :func:`check_out`)."""
-        from ..learning.qtable import atomic_write
+        from ..store.qtable import atomic_write
 
         cols = list(RESULT_COLUMNS)
         for row in self.rows.values():
@@ -1194,7 +1194,7 @@ def _state_space(config: dict[str, Any]) -> int:
 
 
 def _write_configs(path: Path, tasks: list[dict[str, Any]], rows: dict[str, Any]) -> None:
-    from ..learning.qtable import atomic_write
+    from ..store.qtable import atomic_write
 
     summary = config_summary(tasks, rows)
     if summary:
@@ -1269,7 +1269,7 @@ def plot_curves(
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from ..learning.qtable import atomic_write
+    from ..store.qtable import atomic_write
 
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.8), constrained_layout=True)
     for k, (_, c) in enumerate(_configs(tasks).items()):

@@ -66,14 +66,14 @@ from typing import Any
 import numpy as np
 
 from .. import robot_runtime as rt
-from ..learning import run_identity
 from ..learning.episodes import EVAL_STREAM, ROBOT_STREAM, Episodes
 from ..learning.evaluation import evaluate
-from ..learning.qtable import QTable, QTableStore
 from ..learning.training import train
+from ..store import run_identity
 from ..store.config import Config, apply_world
 from ..store.errors import KoolioError, QTableError
 from ..store.files import atomic_write, atomic_write_text
+from ..store.qtable import QTable, QTableStore
 from ..task.env import WRONG_DOOR, KoolioEnv
 from .export import load_any_table, policy_document, write_policy
 
@@ -555,7 +555,7 @@ def check_output(out: Path) -> None:
 
 def preflight(cfg: TransferConfig, out: Path) -> None:
     """Every input checked before anything is written: flags, worlds, goal, the tables to
-    load (:func:`~koolio_pymunk.learning.run_identity.check`, purpose ``transfer``), the
+    load (:func:`~koolio_pymunk.store.run_identity.check`, purpose ``transfer``), the
     output folder."""
     cfg.validate()
     env = make_env(cfg, None)

@@ -1,6 +1,7 @@
-"""The learning floor: the Q-table and the learners on top of the task.
+"""The learning floor: the learners on top of the task (the Q-table they learn into,
+and its files, are the store's: :mod:`koolio_pymunk.store.qtable`).
 
-The sparse Q-table and its file (:mod:`.qtable`), one-step Q (:mod:`.qlearning`),
+One-step Q (:mod:`.qlearning`),
 Q(lambda) (:mod:`.qlambda`), Dyna-Q (:mod:`.dyna`), the algorithm registry
 (:mod:`.algorithms`), training (:mod:`.training`), evaluation, the periodic checks and
 the best table kept (:mod:`.evaluation`); the episode loop, one robot or N in tick

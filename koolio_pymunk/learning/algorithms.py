@@ -4,10 +4,10 @@
 :class:`~koolio_pymunk.learning.qlearning.QLearner`; ``qlambda``:
 :class:`~koolio_pymunk.learning.qlambda.QLambda`; ``dyna``:
 :class:`~koolio_pymunk.learning.dyna.DynaQ`). A Q-table's header records the algorithm
-it was learned with and the parameters :data:`PARAMETERS` names
-(:func:`koolio_pymunk.learning.run_identity.algorithm_record`); a run continues a table
+it was learned with and the parameters :data:`~koolio_pymunk.store.config.PARAMETERS` names
+(:func:`koolio_pymunk.store.run_identity.algorithm_record`); a run continues a table
 only with that algorithm, and ``--init-qtable`` starts a new table from another's Q values
-with any algorithm (:mod:`~koolio_pymunk.learning.run_identity`'s rules).
+with any algorithm (:mod:`~koolio_pymunk.store.run_identity`'s rules).
 """
 
 from __future__ import annotations
@@ -15,22 +15,12 @@ from __future__ import annotations
 import numpy as np
 
 from ..store.config import LearnerConfig
+from ..store.qtable import QTable
 from .qlearning import QLearner
-from .qtable import QTable
-
-#: Parameters of each algorithm recorded in the Q-table header (none for ``q``).
-PARAMETERS: dict[str, tuple[str, ...]] = {
-    "q": (),
-    "qlambda": ("trace_decay", "trace_cutoff"),
-    "dyna": ("planning_steps",),
-}
 
 
-def make_learner(
-    table: QTable, cfg: LearnerConfig, rng: np.random.Generator, source: str = "<table>"
-) -> QLearner:
-    """The learner of ``cfg.algorithm`` on ``table`` (``source`` names the table's file in
-    errors about the data it keeps there)."""
+def make_learner(table: QTable, cfg: LearnerConfig, rng: np.random.Generator) -> QLearner:
+    """The learner of ``cfg.algorithm`` on ``table``."""
     if cfg.algorithm == "qlambda":
         from .qlambda import QLambda
 
@@ -38,5 +28,5 @@ def make_learner(
     if cfg.algorithm == "dyna":
         from .dyna import DynaQ
 
-        return DynaQ(table, cfg, rng, source)
+        return DynaQ(table, cfg, rng)
     return QLearner(table, cfg, rng)

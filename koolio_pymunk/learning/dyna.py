@@ -18,7 +18,7 @@ first whose cumulative count exceeds ``u2 * total``. The model records the state
 led to before any auto rescue, as the real update bootstraps from it (paper §5.4.8).
 
 **Saved between sessions.** The model is part of the Q-table: the section
-``dyna_model`` of the ``.qtable`` file (:mod:`koolio_pymunk.learning.qtable`), written with the
+``dyna_model`` of the ``.qtable`` file (:mod:`koolio_pymunk.store.qtable`), written with the
 table at every episode end and covered by its CRC, so a resumed run draws from the same
 model as an uninterrupted one and continues exactly. Pairs and outcomes keep their
 first-seen order (the draws depend on it). Section layout, little-endian::
@@ -28,7 +28,7 @@ first-seen order (the draws depend on it). Section layout, little-endian::
     uint64 next_state[n_outcomes]; float64 reward[n_outcomes];
     uint64 terminal[n_outcomes], count[n_outcomes]              pair by pair
 
-The section is checked when the table is read (:mod:`koolio_pymunk.learning.dyna_model`:
+The section is checked when the table is read (:mod:`koolio_pymunk.store.dyna_model`:
 states inside the layout, actions in the action set, finite bounded rewards, counts in
 1..2**53), so a bad model is refused with the table, before anything is written.
 
@@ -49,9 +49,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..store.config import LearnerConfig
-from .dyna_model import SECTION, Model
+from ..store.dyna_model import SECTION, Model
+from ..store.qtable import QTable
 from .qlearning import QLearner
-from .qtable import QTable
 
 
 class DynaQ(QLearner):
@@ -60,22 +60,18 @@ class DynaQ(QLearner):
     name = "dyna"
     sections = (SECTION,)
 
-    def __init__(
-        self,
-        table: QTable,
-        cfg: LearnerConfig,
-        rng: np.random.Generator,
-        source: str = "<table>",
-    ) -> None:
+    def __init__(self, table: QTable, cfg: LearnerConfig, rng: np.random.Generator) -> None:
         super().__init__(table, cfg, rng)
         self.planning_steps = cfg.planning_steps
-        found = table.sections.get(SECTION, b"")
-        self.model = (
-            found
-            if isinstance(found, Model)
-            else Model.from_bytes(bytes(found), source, table.layout)
-        )
-        table.sections[SECTION] = self.model  # serialized with the table at every save
+        # The table's model, read and checked with the table (QTable.from_bytes), or a
+        # new one; it stays in the table, which serializes it at every save.
+        model = table.sections.setdefault(SECTION, Model())
+        if not isinstance(model, Model):
+            raise TypeError(
+                f"the table's {SECTION} section is {type(model).__name__}, not a Model "
+                "(QTable.from_bytes parses it when it reads a table)"
+            )
+        self.model = model
 
     def observe(
         self, state: int, action: int, reward: float, next_state: int, terminal: bool

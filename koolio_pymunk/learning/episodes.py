@@ -32,7 +32,7 @@ next_state, terminal)``; it may also have ``relocated(state)``, called after a r
 moved the robot.
 
 >>> from koolio_pymunk.learning.qlearning import QLearner
->>> from koolio_pymunk.learning.qtable import QTable
+>>> from koolio_pymunk.store.qtable import QTable
 >>> from koolio_pymunk.task.env import KoolioEnv
 >>> env = KoolioEnv("room", max_steps=20)
 >>> agent = QLearner(QTable(env.layout), env.config.learner, None)

@@ -30,7 +30,7 @@ under ``best``: ``{"episode", "goal_rate", "mean_return", "mean_steps", "eval_ep
 return; an exact tie keeps the earlier table. The best is the best over the table's whole
 life: a session compares its checks with the best kept by the sessions before it and
 keeps that one when its own are worse. The best table is written atomically with a
-backup and locked like the table (:class:`~koolio_pymunk.learning.qtable.QTableStore`).
+backup and locked like the table (:class:`~koolio_pymunk.store.qtable.QTableStore`).
 
 **Stopped and resumed.** The table is saved before its check, the best table before the
 check's row: a run stopped at any point (Ctrl-C, SIGKILL) and resumed continues exactly
@@ -43,48 +43,22 @@ dropped (the run stops at once) and runs again on resume.
 
 from __future__ import annotations
 
-import csv
 import dataclasses
-import io
-import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..store.episode_log import csv_fields, split_log
-from ..store.errors import KoolioError, QTableError, located
-from ..store.files import atomic_write, check_path, file_error, read_text
-from ..store.locks import FileLock
+from ..store.check_files import CheckFiles
+from ..store.qtable import QTable, QTableStore
 from ..task.env import KoolioEnv
-from . import run_identity
 from .episodes import EVAL_STREAM, EpisodeResult
 from .qlearning import QLearner
-from .qtable import QTable, QTableStore
 
-#: Columns of the evaluations file (module doc).
-EVALS_FIELDS = (
-    "episode",
-    "eval_episodes",
-    "seed",
-    "goal_rate",
-    "end_of_world_rate",
-    "wrong_door_rate",
-    "truncated_rate",
-    "mean_steps",
-    "mean_bumps",
-    "mean_return",
-    "best",
-    "seconds",
-)
-EVALS_HEADER = ",".join(EVALS_FIELDS)
 #: Greedy episodes per check when ``--eval-episodes`` is not given.
 DEFAULT_EVAL_EPISODES = 100
-#: Largest evaluations file read.
-MAX_EVALS_BYTES = 1 << 26
 
 
 @dataclass
@@ -211,28 +185,6 @@ def _robot_goal_rates(done: list[EpisodeResult], players: list[int], n: int) -> 
     return [p.count("goal") / len(p) if p else 0.0 for p in played]
 
 
-def best_path(table: str | Path) -> Path:
-    """The kept best table of the table file ``table``.
-
-    >>> str(best_path("runs/hallway.qtable")), str(best_path("runs/t"))
-    ('runs/hallway.best.qtable', 'runs/t.best.qtable')
-    """
-    p = Path(table)
-    stem = p.stem if p.suffix == ".qtable" else p.name
-    return p.with_name(stem + ".best.qtable")
-
-
-def evals_path(log: str | Path | None, table: str | Path) -> Path:
-    """The evaluations file of a run: beside its log (``X.csv`` -> ``X.evals.csv``), or
-    beside its table when it has no log.
-
-    >>> str(evals_path("runs/hallway.csv", "t.qtable")), str(evals_path("", "runs/t.qtable"))
-    ('runs/hallway.evals.csv', 'runs/t.evals.csv')
-    """
-    base = Path(log) if log is not None and str(log) != "" else Path(table)
-    return base.with_name(base.stem + ".evals.csv")
-
-
 def score(goal_rate: float, mean_return: float) -> tuple[float, float]:
     """What "better" compares: the goal rate, then the mean return (module doc)."""
     return (goal_rate, mean_return)
@@ -266,7 +218,7 @@ class Check:
         }
 
     def row(self) -> list[str]:
-        """The evaluations file's row (:data:`EVALS_FIELDS`)."""
+        """The evaluations file's row (:data:`~koolio_pymunk.store.check_files.EVALS_FIELDS`)."""
         r = self.result
         return [
             str(self.episode),
@@ -289,76 +241,31 @@ class Check:
         ]
 
 
-def best_record(table: QTable, source: str) -> dict[str, Any]:
-    """The ``best`` record of a kept best table's header, checked (one-line error)."""
-    rec = table.meta.get("best")
-
-    def bad(item: str, problem: str) -> QTableError:
-        return QTableError(located(source, f"header.best{item}", problem))
-
-    if not isinstance(rec, dict):
-        raise bad("", "missing or not a mapping (not a best table of train --eval-every)")
-    ep = rec.get("episode")
-    if not isinstance(ep, int) or isinstance(ep, bool) or ep < 0:
-        raise bad(".episode", f"must be an integer >= 0, got {ep!r}"[:120])
-    for key in ("goal_rate", "mean_return"):
-        v = rec.get(key)
-        if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v):
-            raise bad(f".{key}", f"must be a finite number, got {v!r}"[:120])
-    return rec
-
-
-def read_evals(path: str | Path) -> list[list[str]]:
-    """The rows of an evaluations file (header checked), ``[]`` when missing or empty."""
-    p = Path(path)
-    if not p.exists() or p.stat().st_size == 0:
-        return []
-    text = read_text(p, MAX_EVALS_BYTES, "evaluations file")
-    first = text.split("\n", 1)[0].rstrip("\r")
-    if first != EVALS_HEADER:
-        shown = first if len(first) <= 40 else first[:37] + "..."
-        raise KoolioError(
-            located(
-                str(p),
-                "line 1",
-                f"not an evaluations file (its first line is {shown!r}); nothing was written",
-            )
-        )
-    lines, _ = split_log(text)  # a torn last row is a row (resuming moves it away)
-    rows = (csv_fields(str(p), n, line) for n, line in enumerate(lines[1:], start=2))
-    return [row for row in rows if row]
-
-
 class PeriodicCheck:
-    """The periodic greedy check of a training run and its kept best table (module doc).
+    """The periodic greedy check of a training run (module doc), writing through the
+    run's :class:`~koolio_pymunk.store.check_files.CheckFiles` (opened, checked and
+    locked before the run writes anything; the check closes them).
 
-    :meth:`open` checks and locks the evaluations file and the best table before the run
-    writes anything; :meth:`resume` brings them in step with the run's table;
-    :meth:`due` says whether a table of that many episodes is to be checked;
-    :meth:`check` checks it; :meth:`close` releases the locks.
+    :meth:`resume` brings the files in step with the run's table; :meth:`due` says
+    whether a table of that many episodes is to be checked; :meth:`check` checks it;
+    :meth:`close` releases the files.
     """
 
     def __init__(
         self,
+        files: CheckFiles,
         every: int,
         episodes: int,
         seed: int,
-        path: Path,
-        best: QTableStore,
-        lock: FileLock,
-        kept: dict[str, Any] | None,
         shared_robots: int = 0,
     ) -> None:
+        if every < 1 or episodes < 1:
+            raise ValueError(f"every and episodes: >= 1, got {every} and {episodes}")
+        self.files = files
+        """The evaluations file and the best table."""
         self.every = every
         self.episodes = episodes
         self.seed = seed
-        self.path = path
-        """The evaluations file."""
-        self.best = best
-        """The best table's store (locked)."""
-        self._lock = lock
-        self.kept = kept
-        """The kept best table's ``best`` record (None: no best yet)."""
         self.last = 0
         """The ``episode`` of the last row of the evaluations file (0: none)."""
         self.shared_robots = shared_robots
@@ -368,85 +275,20 @@ class PeriodicCheck:
         best)."""
         self._env: KoolioEnv | None = None
 
-    @classmethod
-    def open(
-        cls,
-        run: run_identity.RunIdentity,
-        store: QTableStore,
-        log_path: str | Path | None,
-        every: int,
-        episodes: int,
-        seed: int,
-        purpose: str = "koolio-pm train",
-        shared_robots: int = 0,
-    ) -> PeriodicCheck:
-        """Check and lock the evaluations file and the best table of ``store``'s run
-        ``run`` (``log_path``: its log) before anything is written. A new table (no file, no
-        backup) refuses an evaluations file with rows or a best table: they belong to
-        another run. ``shared_robots``: :attr:`shared_robots`."""
-        if every < 1:
-            raise KoolioError(f"--eval-every: must be >= 1, got {every}")
-        if episodes < 1:
-            raise KoolioError(f"--eval-episodes: must be >= 1, got {episodes}")
-        path = check_path(evals_path(log_path, store.path))
-        best = QTableStore(best_path(store.path), purpose=purpose)
-        _distinct(store.path, log_path, path, best.path)
-        new_table = not (store.path.exists() or store.backup.exists())
-        lock = FileLock(path, purpose).acquire()
-        try:
-            rows, _ = _checked_rows(path)
-            if new_table and rows:
-                raise KoolioError(
-                    located(
-                        str(path),
-                        "",
-                        f"holds {len(rows)} checks of another run, and the Q-table "
-                        f"{store.path} is new: move it away",
-                    )
-                )
-            if new_table and (best.path.exists() or best.backup.exists()):
-                raise KoolioError(
-                    located(
-                        str(best.path),
-                        "",
-                        f"the best table of another run (the Q-table {store.path} is new): "
-                        "move it away",
-                    )
-                )
-            own = store.peek()  # the run's table: the best one must be of its run
-            rid = own.meta.get("run_id") if own is not None else None
-            source = str(best.path)
-            table = best.load(
-                lambda: run_identity.new_table(run),
-                lambda t: run_identity.check(t, run, "keep", source, best.warn, run_id=rid),
-            )
-            kept = None if best.fresh else best_record(table, str(best.path))
-        except BaseException:
-            lock.release()
-            best.close()
-            raise
-        return cls(every, episodes, seed, path, best, lock, kept, shared_robots)
+    @property
+    def kept(self) -> dict[str, Any] | None:
+        """The kept best table's ``best`` record (None: no best yet)."""
+        return self.files.kept
+
+    @property
+    def best(self) -> QTableStore:
+        """The best table's store."""
+        return self.files.best
 
     def resume(self, episodes: int, warn: Callable[[str], None]) -> None:
         """Bring the evaluations file in step with a table of ``episodes`` episodes: rows
         beyond it move to ``<evals>.removed`` (they run again), with ``warn``."""
-        rows, body = _checked_rows(self.path)
-        keep = [r for r in body if int(r[0]) <= episodes]
-        if len(keep) < len(rows):
-            self._move_out(keep, rows[len(keep) :], episodes, warn)
-        self.last = int(keep[-1][0]) if keep else 0
-
-    def _move_out(
-        self, keep: list[list[str]], gone: list[list[str]], episodes: int, warn: Callable
-    ) -> None:
-        removed = self.path.with_name(self.path.name + ".removed")
-        old = read_evals(removed)
-        atomic_write(removed, _csv([*old, *gone]))  # first: a crash between loses nothing
-        atomic_write(self.path, _csv(keep))
-        warn(
-            f"{self.path}: moved {len(gone)} checks to {removed}: the Q-table holds "
-            f"{episodes} episodes (the checks beyond it run again)"
-        )
+        self.last = self.files.resume(episodes, warn)
 
     def due(self, episodes: int) -> bool:
         """Is the table at ``episodes`` episodes to be checked (a multiple of N not yet
@@ -474,67 +316,12 @@ class PeriodicCheck:
         c = Check(episode, result, self.seed, time.perf_counter() - started)
         kept = self.kept
         if kept is None or c.score > score(kept["goal_rate"], kept["mean_return"]):
-            best = table.copy()
-            best.meta["best"] = c.record()
-            self.best.save(best)
-            self.kept = c.record()
+            self.files.keep(table, c.record())
         c.best = self.kept is not None and self.kept["episode"] == episode
-        self._append(c)
+        self.files.append(c.row())
         self.last = episode
         return c
 
-    def _append(self, c: Check) -> None:
-        buf = io.StringIO()
-        csv.writer(buf, lineterminator="\n").writerow(c.row())
-        if not self.path.exists() or self.path.stat().st_size == 0:  # header and row at once
-            atomic_write(self.path, (EVALS_HEADER + "\n" + buf.getvalue()).encode("utf-8"))
-            return
-        try:
-            with open(self.path, "a", newline="", encoding="utf-8") as fh:
-                fh.write(buf.getvalue())
-        except OSError as exc:
-            raise file_error(self.path, "write", exc) from None
-
     def close(self) -> None:
         """Release the evaluations file's and the best table's locks."""
-        try:
-            self._lock.release()
-        finally:
-            self.best.close()
-
-
-def _checked_rows(path: Path) -> tuple[list[list[str]], list[list[str]]]:
-    """The rows of an evaluations file, and those of them that are whole (all but a last
-    row cut short by a kill, which runs again); one-line error on a bad row."""
-    rows = read_evals(path)
-    torn = bool(rows) and not path.read_bytes().endswith(b"\n")
-    body = rows[:-1] if torn else rows
-    last = -1
-    for n, row in enumerate(body, start=2):
-        if len(row) != len(EVALS_FIELDS) or not row[0].isdigit():
-            raise KoolioError(located(str(path), f"line {n}", "not a row of an evaluations file"))
-        if int(row[0]) <= last:
-            raise KoolioError(located(str(path), f"line {n}", f"episode {row[0]} after {last}"))
-        last = int(row[0])
-    return rows, body
-
-
-def _csv(rows: list[list[str]]) -> bytes:
-    buf = io.StringIO()
-    buf.write(EVALS_HEADER + "\n")
-    csv.writer(buf, lineterminator="\n").writerows(rows)
-    return buf.getvalue().encode("utf-8")
-
-
-def _distinct(table: Path, log: str | Path | None, evals: Path, best: Path) -> None:
-    """The evaluations file and the best table are none of the run's other files."""
-    others = {
-        "the Q-table": table,
-        "the Q-table's backup": table.with_name(table.name + ".bak"),
-    }
-    if log is not None and str(log) != "":
-        others["the log"] = Path(log)
-    for path in (evals, best):
-        for what, other in others.items():
-            if path.resolve() == other.resolve():
-                raise KoolioError(located(str(path), "", f"is {what}: give another --qtable/--log"))
+        self.files.close()

@@ -27,7 +27,7 @@ the steps really taken after it rather than only from the next state's estimate.
 
 >>> import numpy as np
 >>> from koolio_pymunk.store.config import LearnerConfig
->>> from koolio_pymunk.learning.qtable import KeywordLayout, QTable
+>>> from koolio_pymunk.store.qtable import KeywordLayout, QTable
 >>> table = QTable(KeywordLayout((("A", 8),)))
 >>> cfg = LearnerConfig(algorithm="qlambda", alpha=0.5, gamma=1.0, trace_decay=0.5)
 >>> agent = QLambda(table, cfg, np.random.default_rng(0))
@@ -42,9 +42,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..store.config import LearnerConfig
+from ..store.qtable import QTable
 from ..task.action_rules import allowed
 from .qlearning import QLearner, td_step, td_target
-from .qtable import QTable
 
 
 class QLambda(QLearner):

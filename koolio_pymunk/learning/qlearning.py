@@ -22,7 +22,7 @@ for every algorithm of ``learner.algorithm`` (:func:`make_learner`):
 
 >>> import numpy as np
 >>> from koolio_pymunk.store.config import LearnerConfig
->>> from koolio_pymunk.learning.qtable import KeywordLayout, QTable
+>>> from koolio_pymunk.store.qtable import KeywordLayout, QTable
 >>> table = QTable(KeywordLayout((("A", 3),)))
 >>> agent = QLearner(table, LearnerConfig(alpha=0.5, gamma=0.9), np.random.default_rng(0))
 >>> table.row(1)[:] = [0.0, 0.0, 4.0, 0.0, 0.0]
@@ -35,8 +35,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..store.config import LearnerConfig
+from ..store.qtable import QTable
 from ..task.action_rules import NONE, allowed, allowed_action, barred
-from .qtable import QTable
 
 
 class QLearner:

@@ -1,13 +1,13 @@
 """The learners' compiled pieces: one Q-table shared by the robots of the step engine.
 
-:class:`SharedTable` mirrors a :class:`~koolio_pymunk.learning.qtable.QTable` in arrays a
+:class:`SharedTable` mirrors a :class:`~koolio_pymunk.store.qtable.QTable` in arrays a
 compiled loop can use: a typed dict from state key to row, a ``(capacity, n_actions)``
 array of values and, per row, the *era* of its last write (``stamp``: the value of
 ``count[1]`` when a kernel wrote it; Python starts a new era with :meth:`SharedTable.mark`).
 :meth:`SharedTable.sync` writes the rows written since its last call back into the
 ``QTable`` (before every snapshot of the table and every check);
 :meth:`SharedTable.changed` gives the rows written since its own last call (a journal
-record of the table's file, :meth:`~koolio_pymunk.learning.qtable.QTableStore.append`).
+record of the table's file, :meth:`~koolio_pymunk.store.qtable.QTableStore.append`).
 The kernels, each the compiled twin of the Python code it names (same float64 operations
 in the same order, the same draws from the same generators):
 
@@ -32,8 +32,8 @@ from numba.typed import Dict
 
 from ..sensing.inline_twins import inline_twin
 from ..store.kernel_cache import ensure_fresh
+from ..store.qtable import QTable
 from ..task.action_rules import allowed_action, barred
-from .qtable import QTable
 
 ensure_fresh()  # numba's cache, in step with every kernel's source (see there)
 

@@ -311,6 +311,13 @@ class EpsilonSchedule:
 
 #: Learning algorithms (``learner.algorithm``); see ``docs/learning.md``.
 ALGORITHMS: tuple[str, ...] = ("q", "qlambda", "dyna")
+#: Parameters of each algorithm a Q-table's header records (none for ``q``):
+#: :func:`~koolio_pymunk.store.run_identity.algorithm_record`.
+PARAMETERS: dict[str, tuple[str, ...]] = {
+    "q": (),
+    "qlambda": ("trace_decay", "trace_cutoff"),
+    "dyna": ("planning_steps",),
+}
 
 
 def _default_epsilon() -> EpsilonSchedule:

@@ -40,7 +40,7 @@ the log and the table can disagree after a stop:
   says that its row is lost.
 
 **The run line.** The log of a table that has a run id
-(:mod:`koolio_pymunk.learning.run_identity`: every table made since version 0.2) starts
+(:mod:`koolio_pymunk.store.run_identity`: every table made since version 0.2) starts
 with ``# koolio-pymunk run <id>`` (:data:`RUN_LINE`), then the header. CSV readers take it
 as a comment (``pandas.read_csv(path, comment="#")``); the robot's logs and the logs of
 earlier tables have none.
@@ -111,7 +111,7 @@ if TYPE_CHECKING:
 #: the same log.
 HEADER = ",".join(LOG_FIELDS)
 #: The first line of the log of a table that has a run id
-#: (:mod:`koolio_pymunk.learning.run_identity`), before the header: ``# koolio-pymunk run
+#: (:mod:`koolio_pymunk.store.run_identity`), before the header: ``# koolio-pymunk run
 #: <id>`` (module doc, "Another run's log"). CSV readers skip it as a comment
 #: (``pandas.read_csv(path, comment="#")``).
 RUN_LINE = "# koolio-pymunk run "

@@ -12,7 +12,7 @@ write of the same target removes the temporary files of processes that no longer
 between the fsync and the rename, and :func:`atomic_link` gives a file a second name
 atomically (a hard link under a temporary name, renamed): the file about to be replaced
 becomes its backup there, its bytes already on disk, with no second write and no second
-fsync (:class:`~koolio_pymunk.learning.qtable.QTableStore`).
+fsync (:class:`~koolio_pymunk.store.qtable.QTableStore`).
 
 **Reading.** Every input file (arenas, configurations, worlds, door tables, logs, sweep
 specs, Q-tables, policies, editor scripts) is read by :func:`read_bytes` /

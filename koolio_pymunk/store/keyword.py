@@ -81,7 +81,7 @@ class KeywordLayout(Layout):
         return self.n_entries * value_bytes
 
     def header_json(self) -> dict[str, Any]:
-        """The Q-table header's ``layout`` (:mod:`koolio_pymunk.learning.qtable`); the
+        """The Q-table header's ``layout`` (:mod:`koolio_pymunk.store.qtable`); the
         policy file's is :meth:`to_json`."""
         return {
             "fields": [[n, lv] for n, lv in self.fields],

@@ -1,6 +1,6 @@
 """Where a run comes from: the versions, the checkout and the command line that made it.
 
-A Q-table records it when it is made (:mod:`koolio_pymunk.learning.run_identity`), as
+A Q-table records it when it is made (:mod:`koolio_pymunk.store.run_identity`), as
 Stable-Baselines3 keeps a ``system_info.txt`` beside a saved model; a sweep's
 ``run.json`` records it too. ``koolio-pm info --qtable`` shows it.
 

@@ -6,7 +6,7 @@ or a configuration whose own ``realism`` section is on (``--config koolio-real``
 configuration file, a sweep's settings). Either way the table records the world the run
 really ran in, so a table learned with realism on never resumes quietly in the ideal world
 and a table learned in the ideal world never resumes quietly in a realistic one
-(:func:`koolio_pymunk.learning.qtable.check_record` compares the names):
+(:func:`koolio_pymunk.store.qtable.check_record` compares the names):
 
 1. realism off: ``ideal`` (the table records nothing);
 2. ``--world W`` that decides the realism alone (the configuration's own realism is off,

@@ -205,6 +205,13 @@ class KoolioEnv(gym.Env):
         if max_steps is not None:
             self.config.episode.max_steps = int(max_steps)
         self.config.validate("config")
+        realism = self.config.realism
+        self.realism: RealismConfig = realism
+        """The realism models of the current episode (a draw when randomized)."""
+        self.randomizer = Randomizer(realism)
+        self.realism_draw: dict[str, float] = {}
+        """The parameters domain randomization drew for this episode (empty: none)."""
+        erring = motion_on(realism) or any(k.startswith("motion.") for k in realism.randomize)
         radius = self.config.robot.radius
         self.arena = arena if isinstance(arena, Arena) else load_arena(arena, radius)
         self.home_goal = self.arena.active_goal
@@ -226,17 +233,13 @@ class KoolioEnv(gym.Env):
         self.robot = robot
         """This robot's index in :attr:`world` (0 unless it shares the arena)."""
         self.world = share.world if share is not None else World.from_arena(self.arena, radius)
+        self.motion = MotionErrors(realism.motion) if erring else None
+        """How the robot's moves err (None: the motion model is off and domain
+        randomization never switches it on)."""
         self.waiting = False
         """A shared arena's robot whose episode began while every start spot was covered:
         it is outside the arena until :meth:`enter` finds one free."""
         self.zones = EndZones(self.world_arena, radius)
-        realism = self.config.realism
-        self.realism: RealismConfig = realism
-        """The realism models of the current episode (a draw when randomized)."""
-        self.randomizer = Randomizer(realism)
-        self.realism_draw: dict[str, float] = {}
-        """The parameters domain randomization drew for this episode (empty: none)."""
-        self.motion = MotionErrors(realism.motion) if self._moves_with_errors() else None
         self.sensors = SensorSuite(
             self.config.sensors,
             self.world,
@@ -535,12 +538,6 @@ class KoolioEnv(gym.Env):
         """The plates of every goal but the active one (a misread takes one for it)."""
         active = self.world_arena.active_goal
         return [g.at for g in self.world_arena.goals if g.name != active]
-
-    def _moves_with_errors(self) -> bool:
-        """The motion model is on, or domain randomization may switch it on."""
-        return motion_on(self.config.realism) or any(
-            k.startswith("motion.") for k in self.config.realism.randomize
-        )
 
     def _act_with_errors(self, action: int) -> None:
         """The action as a real differential drive does it (:class:`MotionErrors`)."""

@@ -110,6 +110,11 @@ class Arena:
     def goal_names(self) -> list[str]:
         return [g.name for g in self.goals]
 
+    @property
+    def record(self) -> dict[str, str]:
+        """What a Q-table records of this arena (:func:`arena_record`)."""
+        return arena_record(self)
+
     def with_active_goal(self, name: str) -> Arena:
         """A copy whose active goal is ``name`` (KeyError if there is no such goal)."""
         self.goal(name)

@@ -311,8 +311,8 @@ def test_info_describes_the_tables_own_layout(tmp_path, capsys) -> None:
     from inputs import table_file
 
     from koolio_pymunk.apps.export import policy_document, write_policy
-    from koolio_pymunk.learning.qtable import load_qtable
     from koolio_pymunk.store.config import load_config
+    from koolio_pymunk.store.qtable import load_qtable
 
     qlambda = {"name": "qlambda", "trace_cutoff": 0.01, "trace_decay": 0.9}
     mem = table_file(tmp_path / "mem.qtable", load_config("paper-memory-qlambda"), qlambda)

@@ -11,17 +11,17 @@ from inputs import expect_error, open_table, table_file
 from koolio_pymunk import robot_runtime as rt
 from koolio_pymunk.apps import cli
 from koolio_pymunk.apps.export import load_any_table, policy_document, write_policy
-from koolio_pymunk.learning import run_identity
 from koolio_pymunk.learning.qlearning import QLearner
-from koolio_pymunk.learning.qtable import (
-    QTableStore,
-    load_qtable,
-)
-from koolio_pymunk.learning.run_identity import sensor_signature
 from koolio_pymunk.learning.training import train
+from koolio_pymunk.store import run_identity
 from koolio_pymunk.store.config import load_config
 from koolio_pymunk.store.errors import QTableError
 from koolio_pymunk.store.locks import FileLock
+from koolio_pymunk.store.qtable import (
+    QTableStore,
+    load_qtable,
+)
+from koolio_pymunk.store.run_identity import sensor_signature
 from koolio_pymunk.task.env import KoolioEnv
 
 

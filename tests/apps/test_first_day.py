@@ -323,7 +323,7 @@ def test_a_run_that_trains_from_the_backup_warns_once_and_says_so_first(here, ca
 def test_a_table_whose_dyna_model_is_bad_is_handled_like_a_torn_one(here, capsys) -> None:
     """docs/robustness.md: ``eval`` (like ``train`` and ``view``) falls back to the backup
     with a warning; ``export`` and ``--init-qtable`` read the file given and refuse it."""
-    from koolio_pymunk.learning.qtable import load_qtable
+    from koolio_pymunk.store.qtable import load_qtable
 
     (here / "dyna.yaml").write_text(
         "learner: {algorithm: dyna, planning_steps: 3}\nepisode: {max_steps: 30}\n"

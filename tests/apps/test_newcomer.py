@@ -21,9 +21,9 @@ os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
 from inputs import learned, open_table, run
 
 from koolio_pymunk.apps import cli
-from koolio_pymunk.learning.qtable import QTableStore, load_qtable
-from koolio_pymunk.learning.run_identity import sensor_signature
 from koolio_pymunk.store.config import PROFILE_DIR, load_config
+from koolio_pymunk.store.qtable import QTableStore, load_qtable
+from koolio_pymunk.store.run_identity import sensor_signature
 from koolio_pymunk.task.env import KoolioEnv
 from koolio_pymunk.world.arena import arena_record
 from tests.inputs import expect_error, header_of

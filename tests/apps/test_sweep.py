@@ -110,7 +110,7 @@ def test_a_run_s_checkpoints_are_train_eval_every_s_checks(tmp_path):
     a last stretch shorter than ``eval_every`` ends with that evaluation of the final
     table."""
     from koolio_pymunk.learning.evaluation import evaluate
-    from koolio_pymunk.learning.qtable import load_qtable
+    from koolio_pymunk.store.qtable import load_qtable
     from koolio_pymunk.task.env import KoolioEnv
 
     text = "name: one\nepisodes: 5\nseeds: [3]\narena: room\n"
@@ -148,7 +148,7 @@ def test_a_run_s_checkpoints_are_train_eval_every_s_checks(tmp_path):
 
 def test_a_run_in_another_world_records_it_in_its_table(tmp_path):
     """As ``train --world`` does: resuming or continuing the table elsewhere is refused."""
-    from koolio_pymunk.learning.qtable import load_qtable
+    from koolio_pymunk.store.qtable import load_qtable
 
     spec = load_spec_text(
         tmp_path, SPEC.replace("seeds: [0, 1]", "seeds: [0]") + "world: koolio-real\n"
@@ -162,7 +162,7 @@ def test_a_run_in_another_world_records_it_in_its_table(tmp_path):
 def test_a_run_whose_configuration_turns_realism_on_records_its_world(tmp_path):
     """``config: koolio-real`` is the world koolio-real, as ``--world`` is; realism swept
     in the grid is named by its content, one world per value."""
-    from koolio_pymunk.learning.qtable import load_qtable
+    from koolio_pymunk.store.qtable import load_qtable
 
     text = SPEC.replace("seeds: [0, 1]", "seeds: [0]").replace(
         "learner.alpha: [0.1, 0.5]", "realism.motion.drift_deg: [0.0, 1.0]"

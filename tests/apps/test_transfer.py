@@ -16,9 +16,9 @@ from koolio_pymunk.apps.cli import main
 from koolio_pymunk.apps.export import policy_document
 from koolio_pymunk.apps.transfer import RobotAgent, drive_episode, plot_or_note
 from koolio_pymunk.learning.episodes import ROBOT_STREAM, Episodes, episode_seeds
-from koolio_pymunk.learning.qtable import QTableStore, load_qtable
 from koolio_pymunk.learning.training import train
 from koolio_pymunk.store.config import Config
+from koolio_pymunk.store.qtable import QTableStore, load_qtable
 from koolio_pymunk.task.env import KoolioEnv
 
 CONFIG = "sensors: {noise: {model: none}}\nepisode: {max_steps: 40}\n"

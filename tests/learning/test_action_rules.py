@@ -8,8 +8,8 @@ import pytest
 
 from koolio_pymunk.learning.algorithms import make_learner
 from koolio_pymunk.learning.episodes import Episodes
-from koolio_pymunk.learning.qtable import KeywordLayout, QTable
 from koolio_pymunk.store.config import LearnerConfig, load_config
+from koolio_pymunk.store.qtable import KeywordLayout, QTable
 from koolio_pymunk.task.action_rules import NONE, UNDO, barred
 from koolio_pymunk.task.env import KoolioEnv
 
@@ -108,8 +108,8 @@ def test_nothing_barred_draws_as_the_rule_off() -> None:
 def _policy(no_undo: bool):
     from koolio_pymunk import robot_runtime as rt
     from koolio_pymunk.apps.export import policy_document
-    from koolio_pymunk.learning.run_identity import sensor_signature
     from koolio_pymunk.store.config import Config
+    from koolio_pymunk.store.run_identity import sensor_signature
 
     cfg = Config()
     cfg.learner.no_undo = no_undo
@@ -156,8 +156,8 @@ def test_many_robots_learn_under_the_rule(tmp_path, capsys) -> None:
     """The step engine runs the rule for any number of robots (it was refused before the
     engine); the table records it."""
     from koolio_pymunk.apps.cli import main
-    from koolio_pymunk.learning.qtable import load_qtable
-    from koolio_pymunk.learning.run_identity import RunIdentity
+    from koolio_pymunk.store.qtable import load_qtable
+    from koolio_pymunk.store.run_identity import RunIdentity
 
     cfg = tmp_path / "n.yaml"
     cfg.write_text("learner: {no_undo: true}\n")
@@ -171,7 +171,7 @@ def test_a_table_is_read_only_under_the_rule_it_was_learned_with(tmp_path, capsy
     line, an export carries it into the policy, and a run without the rule records none
     (its header as before the rule existed)."""
     from koolio_pymunk.apps.cli import main
-    from koolio_pymunk.learning.qtable import load_qtable
+    from koolio_pymunk.store.qtable import load_qtable
 
     cfg = tmp_path / "n.yaml"
     cfg.write_text("episode: {max_steps: 60}\nlearner: {algorithm: q, no_undo: true}\n")

@@ -11,14 +11,14 @@ from koolio_pymunk.apps.cli import main
 from koolio_pymunk.apps.viewer.session import Session
 from koolio_pymunk.learning.algorithms import make_learner
 from koolio_pymunk.learning.dyna import DynaQ
-from koolio_pymunk.learning.dyna_model import SECTION, Model
 from koolio_pymunk.learning.qlambda import QLambda
 from koolio_pymunk.learning.qlearning import QLearner
-from koolio_pymunk.learning.qtable import QTable, QTableStore, load_qtable
 from koolio_pymunk.learning.training import train
 from koolio_pymunk.store.config import Config, LearnerConfig, load_config
+from koolio_pymunk.store.dyna_model import SECTION, Model
 from koolio_pymunk.store.errors import ConfigError, QTableError
 from koolio_pymunk.store.keyword import KeywordLayout
+from koolio_pymunk.store.qtable import QTable, QTableStore, load_qtable
 from koolio_pymunk.task.env import KoolioEnv
 
 LAYOUT = KeywordLayout((("A", 8),))
@@ -185,7 +185,7 @@ def test_dyna_model_counts_and_draws_in_proportion() -> None:
 def test_dyna_model_is_saved_in_the_table_file_under_its_crc(tmp_path) -> None:
     q, _ = _train(tmp_path, "d", 3, small(algorithm="dyna", planning_steps=3))
     table = load_qtable(q)
-    model = Model.from_bytes(table.sections[SECTION])
+    model = table.sections[SECTION]  # read and checked with the table
     assert len(model) > 20 and sum(model.totals) > 60
     data = bytearray(q.read_bytes())
     data[-20] ^= 1  # a byte of the model section
@@ -194,6 +194,28 @@ def test_dyna_model_is_saved_in_the_table_file_under_its_crc(tmp_path) -> None:
         load_qtable(q)
     with pytest.raises(QTableError, match="dyna_model: malformed"):
         Model.from_bytes(bytes(model)[:-8])
+
+
+def test_dyna_model_is_parsed_once_when_the_table_is_read(tmp_path, monkeypatch) -> None:
+    """The learner records into the model the table's reader parsed (no second parse);
+    a copy of the table has a model of its own; bytes put in by hand are refused."""
+    q, _ = _train(tmp_path, "d", 2, small(algorithm="dyna", planning_steps=3))
+    table = load_qtable(q)
+    parsed = table.sections[SECTION]
+    assert isinstance(parsed, Model) and len(parsed) > 0
+    calls = []
+    monkeypatch.setattr(Model, "from_bytes", classmethod(lambda *a, **k: calls.append(a)))
+    cfg = LearnerConfig(algorithm="dyna", planning_steps=3)
+    agent = make_learner(table, cfg, np.random.default_rng(0))
+    assert agent.model is parsed and calls == []
+    monkeypatch.undo()
+    copy = table.copy()
+    assert copy.sections[SECTION] == parsed and copy.sections[SECTION] is not parsed
+    copy.sections[SECTION].record(1, 2, -0.5, 3, False)
+    assert copy.sections[SECTION] != parsed  # recording into the copy leaves the table's
+    by_hand = QTable(table.layout, dict(table.meta), sections={SECTION: bytes(parsed)})
+    with pytest.raises(TypeError, match="dyna_model section is bytes, not a Model"):
+        make_learner(by_hand, cfg, np.random.default_rng(0))
 
 
 def test_one_step_q_table_has_no_new_header_keys(tmp_path) -> None:
@@ -285,8 +307,8 @@ def _policy_pair(algorithm: str, **learner_cfg):
     """A table with random values, its exported policy, and the configuration."""
     from koolio_pymunk import robot_runtime as rt
     from koolio_pymunk.apps.export import policy_document
-    from koolio_pymunk.learning.run_identity import sensor_signature
     from koolio_pymunk.store.config import state_fields
+    from koolio_pymunk.store.run_identity import sensor_signature
 
     cfg = load_config(
         overrides={

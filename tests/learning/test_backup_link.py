@@ -14,11 +14,11 @@ import numpy as np
 import pytest
 from inputs import open_table
 
-from koolio_pymunk.learning.qtable import QTable, QTableStore, load_qtable
 from koolio_pymunk.store import files as files_mod
 from koolio_pymunk.store.config import Config, state_fields
 from koolio_pymunk.store.errors import FileError
 from koolio_pymunk.store.keyword import KeywordLayout
+from koolio_pymunk.store.qtable import QTable, QTableStore, load_qtable
 
 LAYOUT = KeywordLayout(tuple(state_fields(Config().sensors)))
 SENSORS = {"sonar_arc_deg": 55.0}

@@ -9,15 +9,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from koolio_pymunk.learning import engine, run_identity
+from koolio_pymunk.learning import engine
 from koolio_pymunk.learning.algorithms import make_learner
 from koolio_pymunk.learning.engine import Engine, robots, trace_capacity
 from koolio_pymunk.learning.episodes import INTERRUPTED, Robots
 from koolio_pymunk.learning.evaluation import evaluate
-from koolio_pymunk.learning.qtable import QTable, QTableStore, load_qtable
 from koolio_pymunk.learning.training import train
+from koolio_pymunk.store import run_identity
 from koolio_pymunk.store.config import load_config
 from koolio_pymunk.store.episode_log import LOG_FIELDS, log_rows
+from koolio_pymunk.store.qtable import QTable, QTableStore, load_qtable
 from koolio_pymunk.task.env import KoolioEnv
 
 _spec = importlib.util.spec_from_file_location(

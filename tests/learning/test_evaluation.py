@@ -17,18 +17,13 @@ from inputs import expect_error, same_run
 
 from koolio_pymunk.apps.cli import main
 from koolio_pymunk.learning import evaluation
-from koolio_pymunk.learning.evaluation import (
-    EVALS_FIELDS,
-    PeriodicCheck,
-    best_path,
-    evals_path,
-    evaluate,
-)
-from koolio_pymunk.learning.qtable import QTableStore, load_qtable
-from koolio_pymunk.learning.run_identity import RunIdentity
+from koolio_pymunk.learning.evaluation import PeriodicCheck, evaluate
 from koolio_pymunk.learning.training import train
+from koolio_pymunk.store.check_files import EVALS_FIELDS, CheckFiles, best_path, evals_path
 from koolio_pymunk.store.config import Config
 from koolio_pymunk.store.errors import KoolioError, QTableError
+from koolio_pymunk.store.qtable import QTableStore, load_qtable
+from koolio_pymunk.store.run_identity import RunIdentity
 from koolio_pymunk.task.env import KoolioEnv
 
 EVERY, CHECK = 2, 4  # a check every 2 episodes, 4 greedy episodes each
@@ -181,7 +176,7 @@ def test_killed_anywhere_around_a_check_resumes_exactly(tmp_path, monkeypatch, w
     target = {
         "before the check": (PeriodicCheck, "check"),
         "in the check": (evaluation, "evaluate"),
-        "before the row": (PeriodicCheck, "_append"),
+        "before the row": (CheckFiles, "append"),
     }[where]
     with monkeypatch.context() as m:
         m.setattr(*target, kill_on_second(getattr(*target)))
@@ -373,13 +368,10 @@ def test_a_best_table_of_another_layout_is_refused(tmp_path) -> None:
     cfg = config()
     cfg.sensors.camera.camera_sensors_deg = [0.0, -90.0, 90.0]
     with pytest.raises(QTableError, match=r"a\.best\.qtable: sensors\.camera_sensors_deg"):
-        PeriodicCheck.open(
+        CheckFiles.open(
             RunIdentity.of_run(KoolioEnv("room", config=cfg)),
             QTableStore(tmp_path / "a.qtable"),
             None,
-            2,
-            2,
-            0,
         )
 
 

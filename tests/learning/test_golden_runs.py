@@ -5,7 +5,7 @@ neither fails when both change their draws together (a reordered draw, a changed
 a new operation in the shared arithmetic). These runs do: 20 episodes of the default
 hallway run, seed 0, with one robot and with four, on the compiled step engine and in the
 Python loop (the reference), each against the hash of what its table learned
-(:func:`~koolio_pymunk.learning.run_identity.learned_digest`: provenance and run id aside)
+(:func:`~koolio_pymunk.store.run_identity.learned_digest`: provenance and run id aside)
 and of its log's rows. A commit that changes them on purpose records the new hashes and
 says so (CONTRIBUTING.md). Recorded at 6db549c on Linux x86-64 (numba 0.68, numpy 2.4);
 a platform whose libm rounds ``sin``/``cos`` differently may give other values.
@@ -17,9 +17,9 @@ import hashlib
 
 import pytest
 
-from koolio_pymunk.learning import run_identity
-from koolio_pymunk.learning.qtable import QTableStore, load_qtable
 from koolio_pymunk.learning.training import train
+from koolio_pymunk.store import run_identity
+from koolio_pymunk.store.qtable import QTableStore, load_qtable
 from koolio_pymunk.task.env import KoolioEnv
 
 #: robots -> (learned_digest of the table, sha256 of the log's rows)

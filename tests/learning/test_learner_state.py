@@ -2,7 +2,7 @@
 runtime's twin checks agree with the package's (issue #21).
 
 The same bad Dyna-Q models go to the package (a ``dyna_model`` section of a ``.qtable``,
-:meth:`~koolio_pymunk.learning.dyna_model.Model.from_bytes`) and to the robot
+:meth:`~koolio_pymunk.store.dyna_model.Model.from_bytes`) and to the robot
 (``model`` of a policy, ``robot_runtime.Model.from_json``): both refuse every one, both
 accept the good ones with the same content. Q values and rewards have the same bounds in
 tables and policies. A bad file is refused with one line and nothing is written.
@@ -20,10 +20,10 @@ from inputs import expect_error, small_table
 
 from koolio_pymunk import robot_runtime as rt
 from koolio_pymunk.apps.export import policy_document
-from koolio_pymunk.learning.dyna_model import SECTION, Model
-from koolio_pymunk.learning.qtable import QTable
 from koolio_pymunk.store.config import LearnerConfig
+from koolio_pymunk.store.dyna_model import SECTION
 from koolio_pymunk.store.errors import QTableError
+from koolio_pymunk.store.qtable import QTable
 
 TABLE = small_table()
 LAYOUT = TABLE.layout
@@ -116,7 +116,7 @@ def test_both_readers_refuse_the_same_bad_models(model, words):
 @pytest.mark.parametrize("model", GOOD)
 def test_both_readers_accept_the_same_good_models(model):
     table = QTable.from_bytes(dyna_table(section_bytes(model)), "t.qtable")
-    ours = Model.from_bytes(table.sections[SECTION], "t.qtable", LAYOUT)
+    ours = table.sections[SECTION]  # read and checked with the table
     theirs = rt.Policy(dyna_policy(model_json(model)), "p.json").model
     assert ours.pairs == theirs.pairs and ours.totals == theirs.totals
     assert ours.outcomes == theirs.outcomes
@@ -271,7 +271,7 @@ def test_a_number_json_reads_as_infinity_is_refused_everywhere(tmp_path):
 
 def test_an_algorithm_that_is_not_a_name_is_refused():
     """Found by the fuzzer: a list as the algorithm's name was a TypeError (unhashable)."""
-    from koolio_pymunk.learning.run_identity import RunIdentity
+    from koolio_pymunk.store.run_identity import RunIdentity
 
     doc = dyna_policy(None)
     doc["learner"]["algorithm"] = ["dyna"]

@@ -16,8 +16,8 @@ from __future__ import annotations
 import pytest
 
 from koolio_pymunk.learning.evaluation import evaluate
-from koolio_pymunk.learning.qtable import QTable, QTableStore
 from koolio_pymunk.learning.training import train
+from koolio_pymunk.store.qtable import QTable, QTableStore
 from koolio_pymunk.task.env import KoolioEnv
 
 EPISODES = 400

@@ -9,9 +9,9 @@ from inputs import expect_error, run
 
 from koolio_pymunk.learning.algorithms import make_learner
 from koolio_pymunk.learning.episodes import Robots
-from koolio_pymunk.learning.qtable import QTable, load_qtable
 from koolio_pymunk.store.config import load_config
 from koolio_pymunk.store.keyword import own_tables, robot_offset, table_robots
+from koolio_pymunk.store.qtable import QTable, load_qtable
 from koolio_pymunk.task.shared_arena import SharedArena
 
 
@@ -154,20 +154,20 @@ def test_a_shared_table_is_not_resumed_as_own_rows(here, capsys) -> None:
 def test_export_of_one_robot_splits_dyna_models_by_robot(here, capsys) -> None:
     """A Dyna-Q table of own rows: ``export --robot K`` keeps the model's pairs of robot
     K's states (first-seen order), their next states under the plain keyword."""
-    from koolio_pymunk.learning.dyna_model import SECTION, Model
+    from koolio_pymunk.store.dyna_model import SECTION
 
     (here / "dyna.yaml").write_text("episode: {max_steps: 40}\nlearner: {algorithm: dyna}\n")
     made = ["train", "--robots", "2", "--shared-arena", "--tables", "each", "--episodes", "6"]
     assert run(capsys, *made, "--config", "dyna.yaml", "--quiet")[0] == 0
     table = load_qtable(here / "runs" / "hallway.qtable")
-    whole = Model.from_bytes(table.sections[SECTION])
+    whole = table.sections[SECTION]
     low = robot_offset(table.layout, 1) - 1
     for k in (0, 1):
         out = f"r{k}.qtable"
         argv = ["export", "--qtable", "runs/hallway.qtable", "--robot", str(k), "--out", out]
         assert run(capsys, *argv, "--config", "dyna.yaml")[0] == 0
         one = load_qtable(here / out)  # its model checked against the plain keyword
-        its = Model.from_bytes(one.sections[SECTION], out, one.layout)
+        its = one.sections[SECTION]
         mine = [i for i, (s, _) in enumerate(whole.pairs) if _robot_of(table.layout, s) == k]
         assert mine and its.pairs == [(whole.pairs[i][0] & low, whole.pairs[i][1]) for i in mine]
         assert [[o[0] for o in outs] for outs in its.outcomes] == [

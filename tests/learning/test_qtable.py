@@ -7,16 +7,16 @@ import os
 import pytest
 from inputs import made_for, open_table
 
-from koolio_pymunk.learning import run_identity
-from koolio_pymunk.learning.qtable import (
+from koolio_pymunk.store import run_identity
+from koolio_pymunk.store.config import Config, state_fields
+from koolio_pymunk.store.errors import FileError, QTableError
+from koolio_pymunk.store.keyword import PAPER_ORIGINAL_FIELDS, KeywordLayout
+from koolio_pymunk.store.qtable import (
     QTable,
     QTableStore,
     human_bytes,
     load_qtable,
 )
-from koolio_pymunk.store.config import Config, state_fields
-from koolio_pymunk.store.errors import FileError, QTableError
-from koolio_pymunk.store.keyword import PAPER_ORIGINAL_FIELDS, KeywordLayout
 
 LAYOUT = KeywordLayout(tuple(state_fields(Config().sensors)))
 SENSORS = {"sonar_arc_deg": 55.0}

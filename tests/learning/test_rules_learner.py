@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from koolio_pymunk.learning.qlearning import QLearner
-from koolio_pymunk.learning.qtable import QTable
 from koolio_pymunk.store.config import EpsilonSchedule, LearnerConfig, RewardConfig
 from koolio_pymunk.store.keyword import KeywordLayout
+from koolio_pymunk.store.qtable import QTable
 from koolio_pymunk.task.rules import TERMS, judge
 from koolio_pymunk.world.physics import Action
 

@@ -11,12 +11,12 @@ from pathlib import Path
 import pytest
 
 from koolio_pymunk.apps.cli import main
-from koolio_pymunk.learning import run_identity
-from koolio_pymunk.learning.qtable import QTable, load_qtable
-from koolio_pymunk.learning.run_identity import PURPOSES, RULES, RunIdentity
+from koolio_pymunk.store import run_identity
 from koolio_pymunk.store.config import Config, load_config
 from koolio_pymunk.store.episode_log import RUN_LINE, log_rows
 from koolio_pymunk.store.errors import QTableError
+from koolio_pymunk.store.qtable import QTable, load_qtable
+from koolio_pymunk.store.run_identity import PURPOSES, RULES, RunIdentity
 from koolio_pymunk.task.env import KoolioEnv
 
 ROOT = Path(__file__).resolve().parents[2]

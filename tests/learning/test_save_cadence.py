@@ -14,11 +14,11 @@ import pytest
 from inputs import same_run
 
 from koolio_pymunk.apps.cli import main
-from koolio_pymunk.learning import qtable as qtable_module
-from koolio_pymunk.learning.qtable import QTableStore, load_qtable
 from koolio_pymunk.learning.training import train
+from koolio_pymunk.store import qtable as qtable_module
 from koolio_pymunk.store.config import load_config
 from koolio_pymunk.store.episode_log import log_rows
+from koolio_pymunk.store.qtable import QTableStore, load_qtable
 from koolio_pymunk.task.env import KoolioEnv
 
 CONFIG = "episode: {max_steps: 40}\n"

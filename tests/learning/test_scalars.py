@@ -4,10 +4,10 @@ TensorBoard's own reader, continued by a resumed run."""
 from __future__ import annotations
 
 from koolio_pymunk.apps.cli import main
-from koolio_pymunk.learning.qtable import QTableStore
 from koolio_pymunk.learning.training import train
 from koolio_pymunk.store.config import load_config
 from koolio_pymunk.store.episode_log import log_rows
+from koolio_pymunk.store.qtable import QTableStore
 from koolio_pymunk.task.env import KoolioEnv
 
 

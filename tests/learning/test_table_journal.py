@@ -1,4 +1,4 @@
-"""--fsync second: a table's journal between durable snapshots (learning/table_journal.py,
+"""--fsync second: a table's journal between durable snapshots (store/table_journal.py,
 QTableStore.append, RunFiles.keep): what a kill and a power loss leave, and who reads it."""
 
 from __future__ import annotations
@@ -14,13 +14,13 @@ import pytest
 from inputs import open_table
 
 from koolio_pymunk.apps.cli import main
-from koolio_pymunk.learning import table_journal, training
-from koolio_pymunk.learning.qtable import QTable, QTableStore, load_qtable
 from koolio_pymunk.learning.training import train
+from koolio_pymunk.store import run_files, table_journal
 from koolio_pymunk.store.config import load_config
 from koolio_pymunk.store.episode_log import log_rows
 from koolio_pymunk.store.errors import QTableError
 from koolio_pymunk.store.keyword import KeywordLayout
+from koolio_pymunk.store.qtable import QTable, QTableStore, load_qtable
 from koolio_pymunk.task.env import KoolioEnv
 
 LAYOUT = KeywordLayout((("A", 8), ("B", 4)))
@@ -141,7 +141,7 @@ def test_durable_snapshots_at_most_once_a_second(tmp_path, monkeypatch) -> None:
     def tick() -> float:
         return clock[0]
 
-    monkeypatch.setattr(training.time, "monotonic", tick)
+    monkeypatch.setattr(run_files.time, "monotonic", tick)
     snapshots, records = [], []
     real_save, real_append = QTableStore.save, QTableStore.append
 
@@ -225,14 +225,14 @@ def test_whole_table_records_for_what_is_not_tracked(tmp_path, monkeypatch, algo
     straight = tmp_path / "s.qtable"
     res = train(env_(), QTableStore(straight), 4, 0, None, report=None, fsync="episode")
     assert res.python_reason is not None  # the premise: the Python loop
-    real = training.RunFiles.finished
+    real = run_files.RunFiles.finished
 
     def dies(self, r, save=False):
         real(self, r, save)
         if r.episode == 3:
             raise RuntimeError("the process dies here")
 
-    monkeypatch.setattr(training.RunFiles, "finished", dies)
+    monkeypatch.setattr(run_files.RunFiles, "finished", dies)
     killed = tmp_path / "k.qtable"
     with pytest.raises(RuntimeError):
         train(env_(), QTableStore(killed), 10, 0, None, report=None)

@@ -6,10 +6,10 @@ import pytest
 
 from koolio_pymunk.learning.evaluation import evaluate
 from koolio_pymunk.learning.qlearning import QLearner
-from koolio_pymunk.learning.qtable import QTableStore, load_qtable
 from koolio_pymunk.learning.training import train
 from koolio_pymunk.store.config import Config
 from koolio_pymunk.store.episode_log import LOG_FIELDS, log_rows
+from koolio_pymunk.store.qtable import QTableStore, load_qtable
 from koolio_pymunk.task.action_rules import allowed
 from koolio_pymunk.task.env import KoolioEnv
 
@@ -135,7 +135,7 @@ def test_the_run_identity_takes_the_arena_its_env_loaded(tmp_path) -> None:
     (an edit of the file after the env loaded it changes neither the run nor its
     identity), another goal made active (``goal``) is recorded, and a sibling (the
     periodic check's robot) has the same identity."""
-    from koolio_pymunk.learning.run_identity import RunIdentity
+    from koolio_pymunk.store.run_identity import RunIdentity
     from koolio_pymunk.world.arena import arena_path
 
     text = arena_path("hallway").read_text()

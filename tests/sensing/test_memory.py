@@ -9,19 +9,19 @@ from inputs import open_table
 from koolio_pymunk import robot_runtime as rt
 from koolio_pymunk.apps.cli import main
 from koolio_pymunk.apps.export import policy_document
-from koolio_pymunk.learning import run_identity
 from koolio_pymunk.learning.episodes import Episodes
 from koolio_pymunk.learning.qlearning import QLearner
-from koolio_pymunk.learning.qtable import (
+from koolio_pymunk.learning.training import train
+from koolio_pymunk.sensing.memory import Memory
+from koolio_pymunk.store import run_identity
+from koolio_pymunk.store.config import Config, MemoryConfig, load_config
+from koolio_pymunk.store.errors import ConfigError, QTableError
+from koolio_pymunk.store.qtable import (
     QTable,
     QTableStore,
     load_qtable,
 )
-from koolio_pymunk.learning.run_identity import RunIdentity, sensor_signature
-from koolio_pymunk.learning.training import train
-from koolio_pymunk.sensing.memory import Memory
-from koolio_pymunk.store.config import Config, MemoryConfig, load_config
-from koolio_pymunk.store.errors import ConfigError, QTableError
+from koolio_pymunk.store.run_identity import RunIdentity, sensor_signature
 from koolio_pymunk.task.env import KoolioEnv
 
 FAR = 10_000.0

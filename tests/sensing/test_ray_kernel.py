@@ -11,14 +11,14 @@ import numpy as np
 import pytest
 from sensing_agreement import compare_backends, free_poses
 
-from koolio_pymunk.learning import run_identity
-from koolio_pymunk.learning.qtable import QTableStore, load_qtable
-from koolio_pymunk.learning.run_identity import sensor_signature
 from koolio_pymunk.learning.training import train
 from koolio_pymunk.sensing.ray_engines import FastRays, PymunkRays
 from koolio_pymunk.sensing.ray_kernel import _ray_directions, new_trig
 from koolio_pymunk.sensing.suite import SensorSuite, sonar_ray_offsets, turned, unit_vectors
+from koolio_pymunk.store import run_identity
 from koolio_pymunk.store.config import Config, SensorConfig
+from koolio_pymunk.store.qtable import QTableStore, load_qtable
+from koolio_pymunk.store.run_identity import sensor_signature
 from koolio_pymunk.task.env import KoolioEnv
 from koolio_pymunk.world.arena import load_arena
 from koolio_pymunk.world.physics import World

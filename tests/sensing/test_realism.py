@@ -13,8 +13,6 @@ from inputs import log_body
 from sensing_agreement import compare_backends, free_poses, same_readings
 
 from koolio_pymunk.apps.cli import main
-from koolio_pymunk.learning import run_identity
-from koolio_pymunk.learning.qtable import QTable, QTableStore, load_qtable
 from koolio_pymunk.learning.training import train
 from koolio_pymunk.sensing.realism import (
     F_BEAM,
@@ -27,9 +25,11 @@ from koolio_pymunk.sensing.realism import (
 )
 from koolio_pymunk.sensing.realism_kernel import apply_realism
 from koolio_pymunk.sensing.suite import SensorSuite
+from koolio_pymunk.store import run_identity
 from koolio_pymunk.store.config import Config, SensorConfig, load_config
 from koolio_pymunk.store.episode_log import LOG_FIELDS, log_rows
 from koolio_pymunk.store.errors import ConfigError
+from koolio_pymunk.store.qtable import QTable, QTableStore, load_qtable
 from koolio_pymunk.store.realism_config import MotionRealism, RealismConfig
 from koolio_pymunk.task.env import KoolioEnv
 from koolio_pymunk.world.arena import load_arena
@@ -523,7 +523,7 @@ def test_unknown_world_profile_is_one_line_exit_2(capsys) -> None:
 
 def test_koolio_real_keeps_the_sensor_signature() -> None:
     """A table learned in the ideal world loads in koolio-real (the transfer depends on it)."""
-    from koolio_pymunk.learning.run_identity import sensor_signature
+    from koolio_pymunk.store.run_identity import sensor_signature
 
     real = load_config(world="koolio-real")
     assert sensor_signature(real) == sensor_signature(Config())
@@ -564,7 +564,7 @@ def test_robot_runtime_encodes_the_realistic_readings_as_the_simulator(tmp_path)
     experiment runs the runtime on these readings)."""
     from koolio_pymunk import robot_runtime as rt
     from koolio_pymunk.apps.export import policy_document
-    from koolio_pymunk.learning.qtable import load_qtable
+    from koolio_pymunk.store.qtable import load_qtable
 
     cfg = Config()
     cfg.episode.max_steps = 60

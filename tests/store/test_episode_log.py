@@ -12,7 +12,6 @@ import pytest
 from inputs import expect_error
 
 from koolio_pymunk.apps import cli
-from koolio_pymunk.learning.qtable import load_qtable
 from koolio_pymunk.store.config import EpsilonSchedule
 from koolio_pymunk.store.episode_log import (
     RUN_LINE,
@@ -24,6 +23,7 @@ from koolio_pymunk.store.episode_log import (
     schedule_gives,
 )
 from koolio_pymunk.store.errors import KoolioError
+from koolio_pymunk.store.qtable import load_qtable
 
 ENV = ["--arena", "room", "--config", "tiny.yaml"]
 FILES = ["--qtable", "q.qtable", "--log", "q.csv"]
@@ -358,9 +358,9 @@ def test_a_store_trained_in_chunks_resumes_its_own_log(tmp_path) -> None:
     """``train`` called again with the same store object (a sweep's or the targets
     tool's chunks between checks): the table the first call created is resumed with its
     log, quietly, and the files equal one uninterrupted run's."""
-    from koolio_pymunk.learning.qtable import QTableStore
     from koolio_pymunk.learning.training import train
     from koolio_pymunk.store.config import load_config
+    from koolio_pymunk.store.qtable import QTableStore
     from koolio_pymunk.task.env import KoolioEnv
 
     warnings: list[str] = []

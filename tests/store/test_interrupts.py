@@ -13,10 +13,10 @@ from pathlib import Path
 
 import pytest
 
-from koolio_pymunk.learning.qtable import load_qtable
 from koolio_pymunk.store import interrupts
 from koolio_pymunk.store.episode_log import log_rows
 from koolio_pymunk.store.interrupts import SafeInterrupt, deferred
+from koolio_pymunk.store.qtable import load_qtable
 
 ROOT = Path(__file__).resolve().parents[2]
 pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")

@@ -499,7 +499,7 @@ def test_the_mask_allows_exactly_what_the_learner_may_choose(no_undo: bool) -> N
     with auto rescues (where the learner's ``relocated`` frees the next action)."""
     from koolio_pymunk.learning.episodes import Episodes
     from koolio_pymunk.learning.qlearning import QLearner
-    from koolio_pymunk.learning.qtable import QTable
+    from koolio_pymunk.store.qtable import QTable
     from koolio_pymunk.task.action_rules import allowed
 
     cfg = rescuing_config(no_undo)

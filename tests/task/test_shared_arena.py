@@ -177,7 +177,7 @@ def test_robots_of_a_shared_arena_meet_wait_and_bump_each_other() -> None:
     Bump, and some episode begins while every spot is covered."""
     from koolio_pymunk.learning.algorithms import make_learner
     from koolio_pymunk.learning.episodes import Robots
-    from koolio_pymunk.learning.qtable import QTable
+    from koolio_pymunk.store.qtable import QTable
 
     cfg = load_config(overrides={**CROWDED, "episode": {"max_steps": 40}})
     envs = SharedArena.envs(3, "hallway", cfg)

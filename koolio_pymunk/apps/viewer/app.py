@@ -242,10 +242,10 @@ def _frames_folder(folder: str) -> Path:
 def run(args: argparse.Namespace) -> int:
     """``koolio-pm view``."""
     every = _check_args(args)
-    from ...learning.qtable import QTableStore
-    from ...learning.run_identity import RunIdentity
-    from ...learning.training import RunFiles
     from ...store.interrupts import deferred
+    from ...store.qtable import QTableStore
+    from ...store.run_files import RunFiles
+    from ...store.run_identity import RunIdentity
     from ...task.env import KoolioEnv
     from ..cli import announce_compile, check_shared_arena
     from .session import Session, SharedSession, watched_table

@@ -2,7 +2,7 @@
 
 :class:`Session` drives :class:`~koolio_pymunk.learning.episodes.Episodes`, the episode
 loop of ``koolio-pm train``, one step per call as the window asks (paper §5.4.9), and
-records every finished episode through :class:`~koolio_pymunk.learning.training.RunFiles`
+records every finished episode through :class:`~koolio_pymunk.store.run_files.RunFiles`
 as ``train`` does (table saved at every episode end, then the log row, with the same
 columns in every world). A window run of E episodes therefore writes the same Q-table
 bytes and log rows as ``train --episodes E`` with the same seed (as long as nobody forces
@@ -35,7 +35,6 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ...learning import run_identity
 from ...learning.algorithms import make_learner
 from ...learning.episodes import (
     EVAL_STREAM,
@@ -46,10 +45,11 @@ from ...learning.episodes import (
     Robots,
 )
 from ...learning.qlearning import QLearner
-from ...learning.qtable import QTable, QTableStore
-from ...learning.training import RunFiles
+from ...store import run_identity
 from ...store.episode_log import log_rows
 from ...store.errors import KoolioError, located
+from ...store.qtable import QTable, QTableStore
+from ...store.run_files import RunFiles
 from ...task.env import KoolioEnv
 
 
@@ -109,8 +109,8 @@ def read_history(path: str | Path) -> tuple[list[float], list[bool]]:
 
 def watched_table(env: KoolioEnv, qtable: str | Path, warn: bool = True, robots: int = 1) -> QTable:
     """The table a greedy session of ``robots`` robots watches, checked for ``env``
-    (purpose ``watch`` of :func:`~koolio_pymunk.learning.run_identity.check`, as
-    :meth:`RunIdentity.of_robots <koolio_pymunk.learning.run_identity.RunIdentity.of_robots>`
+    (purpose ``watch`` of :func:`~koolio_pymunk.store.run_identity.check`, as
+    :meth:`RunIdentity.of_robots <koolio_pymunk.store.run_identity.RunIdentity.of_robots>`
     plays it); its backup when the file is damaged or missing, with a warning unless not
     ``warn``, as ``train`` and ``eval`` read it."""
     table = QTableStore(qtable).peek(warn=warn)
@@ -181,7 +181,7 @@ class Session:
         """The learner and the episode loop (learning or greedy)."""
         cfg = self.env.config
         if learn:
-            self.agent = make_learner(self.table, cfg.learner, None, str(self.table_path))
+            self.agent = make_learner(self.table, cfg.learner, None)
             self.loop = Episodes(self.env, self.agent, self.seed, TRAIN_STREAM)
         else:
             self.agent = QLearner(self.table, cfg.learner, None)
@@ -343,8 +343,7 @@ class SharedSession(Session):
         cfg = self.envs[0].config
         if learn:
             self.agents = [
-                make_learner(self.table, cfg.learner, None, str(self.table_path))
-                for _ in range(self.n_robots)
+                make_learner(self.table, cfg.learner, None) for _ in range(self.n_robots)
             ]
             self.robots = Robots(self.envs, self.agents, self.seed, TRAIN_STREAM)
         else:

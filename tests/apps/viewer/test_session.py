@@ -5,9 +5,9 @@ from __future__ import annotations
 import pytest
 
 from koolio_pymunk.apps.viewer.session import Session
-from koolio_pymunk.learning.qtable import QTableStore
 from koolio_pymunk.learning.training import train
 from koolio_pymunk.store.config import load_config, profile_names
+from koolio_pymunk.store.qtable import QTableStore
 from koolio_pymunk.task.env import KoolioEnv
 
 #: The ideal world and every shipped world profile.

@@ -20,9 +20,9 @@ from koolio_pymunk.apps.cli import main  # noqa: E402
 from koolio_pymunk.apps.viewer import hud  # noqa: E402
 from koolio_pymunk.apps.viewer.app import ViewerApp  # noqa: E402
 from koolio_pymunk.apps.viewer.session import Session  # noqa: E402
-from koolio_pymunk.learning.qtable import QTableStore, load_qtable  # noqa: E402
 from koolio_pymunk.learning.training import train  # noqa: E402
 from koolio_pymunk.store.episode_log import log_rows  # noqa: E402
+from koolio_pymunk.store.qtable import QTableStore, load_qtable  # noqa: E402
 from koolio_pymunk.task import drawing as draw  # noqa: E402
 from koolio_pymunk.task.env import KoolioEnv  # noqa: E402
 from koolio_pymunk.world.physics import Action  # noqa: E402

@@ -29,7 +29,7 @@ with a valid checksum but ``episodes: -5`` or a key beyond its layout is refused
 one-line :class:`~koolio_pymunk.store.errors.QTableError` naming the item).
 
 **What a table records of its run**: the run identity and its provenance
-(:mod:`koolio_pymunk.learning.run_identity`, which makes, reads and checks them). ``goal``
+(:mod:`koolio_pymunk.store.run_identity`, which makes, reads and checks them). ``goal``
 is recorded only when the run's goal is not the arena's active goal (``random``, or
 another door), ``world`` only when the run was not in the ideal world: an absent key means
 the default. ``run_id`` and ``provenance`` (versions, commit, configuration, command line)
@@ -69,8 +69,10 @@ from typing import Any
 import numpy as np
 
 from ..robot_runtime import MAX_Q, is_number, nonfinite_item
-from ..store.errors import FileError, QTableError, located, shown
-from ..store.files import (
+from . import table_journal
+from .dyna_model import SECTION, Model
+from .errors import FileError, QTableError, located, shown
+from .files import (
     atomic_link,
     atomic_write,
     check_writable,
@@ -81,7 +83,7 @@ from ..store.files import (
     remove_stale_temps,
     staged_write,
 )
-from ..store.keyword import (
+from .keyword import (
     MAX_ACTIONS,
     MAX_KEYWORD_BITS,
     MAX_LEVELS,
@@ -90,9 +92,7 @@ from ..store.keyword import (
     robot_offset,
     table_robots,
 )
-from ..store.locks import FileLock
-from . import table_journal
-from .dyna_model import SECTION, Model
+from .locks import FileLock
 
 MAGIC = b"KOOLIOQT"
 FORMAT_VERSION = 1
@@ -116,7 +116,10 @@ class QTable:
     rows: dict[int, list[float]] = field(default_factory=dict)
     sections: dict[str, Any] = field(default_factory=dict)
     """Named data saved after the values: ``bytes``, or an object ``bytes()`` accepts
-    (``__bytes__``), serialized at every save. Read back as ``bytes``."""
+    (``__bytes__``), serialized at every save. Read back as ``bytes``, but for Dyna-Q's
+    model (``dyna_model``): parsed and checked once, when the table is read, and kept as
+    the :class:`~koolio_pymunk.store.dyna_model.Model` the learner goes on recording
+    into."""
 
     def __len__(self) -> int:
         return len(self.rows)
@@ -153,7 +156,7 @@ class QTable:
             dict(self.meta),
             self.q_init,
             {k: list(v) for k, v in self.rows.items()},
-            {k: bytes(v) for k, v in self.sections.items()},
+            {k: _section_copy(k, v) for k, v in self.sections.items()},
         )
 
     def robot_table(self, robot: int) -> QTable:
@@ -187,7 +190,7 @@ class QTable:
             for (state, action), outs in zip(model.pairs, model.outcomes):
                 if state & ~low == mine:
                     its.add(state & low, action, [[o[0] & low, *o[1:]] for o in outs])
-            sections[SECTION] = bytes(its)
+            sections[SECTION] = its
         return QTable(base, meta, self.q_init, rows, sections)
 
     # -- bytes ----------------------------------------------------------------------
@@ -270,8 +273,15 @@ class QTable:
             sections[name] = data[pos : pos + length]
             pos += length
         if SECTION in sections:  # refused with the table, before a run writes anything
-            Model.from_bytes(sections[SECTION], source, layout)
+            sections[SECTION] = Model.from_bytes(sections[SECTION], source, layout)
         return cls(layout, header, q_init, rows, sections)
+
+
+def _section_copy(name: str, value: Any) -> Any:
+    """A section of a copied table: Dyna-Q's model a model of its own, the others bytes."""
+    if name == SECTION:
+        return Model.from_bytes(bytes(value))
+    return bytes(value)
 
 
 def _count(v: Any) -> bool:
@@ -292,7 +302,7 @@ def _is_int(v: Any) -> bool:
 
 
 #: Header keys of what a table records of its run besides the arena, the sensors and the
-#: algorithm (only when not the defaults; :mod:`~koolio_pymunk.learning.run_identity`).
+#: algorithm (only when not the defaults; :mod:`~koolio_pymunk.store.run_identity`).
 RECORD_KEYS = ("goal", "world")
 _RUN_ID = re.compile(r"[0-9a-f]{16}")
 
@@ -420,7 +430,7 @@ class QTableStore:
     empty one without writing (:attr:`fresh`); :meth:`create` writes a new table's files;
     :meth:`save` writes the whole table (a *snapshot*), :meth:`append`
     adds the rows one episode changed to the journal
-    (:mod:`~koolio_pymunk.learning.table_journal`); :meth:`close` releases the lock.
+    (:mod:`~koolio_pymunk.store.table_journal`); :meth:`close` releases the lock.
     A caller checks what must be checked before any file is written (the training log)
     between the two.
 
@@ -478,7 +488,7 @@ class QTableStore:
         self, new: Callable[[], QTable], check: Callable[[QTable], object] | None = None
     ) -> QTable:
         """Lock and read the table, judged by ``check`` (which raises to refuse it: a run's
-        :func:`~koolio_pymunk.learning.run_identity.check`), or make a new empty one,
+        :func:`~koolio_pymunk.store.run_identity.check`), or make a new empty one,
         ``new()``, without writing it (``fresh``). On any error the lock is released
         again."""
         self.lock()
@@ -549,7 +559,7 @@ class QTableStore:
         hold ``values`` (the rows an episode changed) and the table
         ``table.meta["episodes"]`` episodes; without ``keys``, the whole table (a learner
         whose changes are not tracked, a table with data sections). Written, not fsynced:
-        a killed process loses nothing (:mod:`~koolio_pymunk.learning.table_journal`).
+        a killed process loses nothing (:mod:`~koolio_pymunk.store.table_journal`).
         The table file must hold the snapshot the journal continues (a :meth:`save` or a
         :meth:`load` since)."""
         self.lock()
@@ -668,7 +678,7 @@ FSYNC_MODES = ("episode", "second")
 
 def with_journal(table: QTable, data: bytes, path: Path, warn=None) -> QTable:
     """``table`` (read from the snapshot ``data``) with the journal at ``path`` replayed
-    (:mod:`~koolio_pymunk.learning.table_journal`); a journal cut short is used up to its
+    (:mod:`~koolio_pymunk.store.table_journal`); a journal cut short is used up to its
     last whole record, with a warning."""
     try:
         journal = read_bytes(path, MAX_TABLE_BYTES, "journal")

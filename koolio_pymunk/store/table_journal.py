@@ -2,7 +2,7 @@
 
 Writing the whole table at every episode end costs more than the episode (a table of
 7,500 states is 360 KB, 1.4 ms to lay out), and an fsync at every episode end costs more
-again. With ``--fsync second`` (the default; :class:`~koolio_pymunk.learning.qtable.QTableStore`)
+again. With ``--fsync second`` (the default; :class:`~koolio_pymunk.store.qtable.QTableStore`)
 a run writes the table file (the *snapshot*) at most once a second, durably (fsynced,
 its folder too; the previous snapshot becomes the backup), and at every other episode
 end appends to ``X.qtable.journal`` the rows the episode changed (written, not fsynced:
@@ -52,7 +52,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..store.errors import QTableError, located
+from .errors import QTableError, located
 
 MAGIC = b"KOOLIOQJ"
 VERSION = 1

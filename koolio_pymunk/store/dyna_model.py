@@ -2,7 +2,7 @@
 
 The model itself (what it keeps, how it is drawn from) is described in
 :mod:`koolio_pymunk.learning.dyna`; here it is read and written. It lives below the
-Q-table (:mod:`koolio_pymunk.learning.qtable` checks a table's ``dyna_model`` section
+Q-table (:mod:`koolio_pymunk.store.qtable` checks a table's ``dyna_model`` section
 with :meth:`Model.from_bytes` when it reads the file, so a bad model is refused with the
 table, before a run writes anything).
 
@@ -24,8 +24,8 @@ import struct
 import numpy as np
 
 from .. import robot_runtime as rt
-from ..store.errors import QTableError, located
-from ..store.keyword import KeywordLayout
+from .errors import QTableError, located
+from .keyword import KeywordLayout
 
 #: Name of the model's section in the Q-table file.
 SECTION = "dyna_model"
@@ -36,6 +36,12 @@ class Model(rt.Model):
     the robot runtime's :class:`~koolio_pymunk.robot_runtime.Model` (one recording and
     one :meth:`~koolio_pymunk.robot_runtime.Model.sample` for the simulator and the
     robot), read and written as the Q-table file's section."""
+
+    def __eq__(self, other: object) -> bool:
+        """The same pairs and outcomes, in the same order (the same bytes)."""
+        return isinstance(other, Model) and bytes(self) == bytes(other)
+
+    __hash__ = None  # type: ignore[assignment]  # recorded into: not hashable
 
     def __bytes__(self) -> bytes:
         n = len(self.pairs)

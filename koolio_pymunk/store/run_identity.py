@@ -1,6 +1,6 @@
 """What a Q-table is, where it came from, and who may use it: one identity, checked once.
 
-A table records the run it was learned by (its header, :mod:`~koolio_pymunk.learning.qtable`):
+A table records the run it was learned by (its header, :mod:`~koolio_pymunk.store.qtable`):
 the keyword layout, the sensors it read (:func:`sensor_signature`), the arena, the goal
 and the world, the learning algorithm and the no-undo rule; since this module also its
 *provenance* (package and library versions, the checkout's commit, the resolved
@@ -56,10 +56,11 @@ import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from ..store import provenance
-from ..store.config import (
+from . import provenance
+from .config import (
+    PARAMETERS,
     Config,
     LearnerConfig,
     MemoryConfig,
@@ -67,15 +68,15 @@ from ..store.config import (
     profile_names,
     state_fields,
 )
-from ..store.episode_log import RowRules
-from ..store.errors import KoolioError, QTableError, located, shown
-from ..store.keyword import KeywordLayout, base_layout, table_robots
-from ..store.keyword import own_tables as own_layout
-from ..store.worlds import IDEAL, world_label
-from ..task.env import KoolioEnv
-from ..world.arena import arena_record
-from .algorithms import PARAMETERS
+from .episode_log import RowRules
+from .errors import KoolioError, QTableError, located, shown
+from .keyword import KeywordLayout, base_layout, table_robots
+from .keyword import own_tables as own_layout
 from .qtable import QTable
+from .worlds import IDEAL, world_label
+
+if TYPE_CHECKING:  # an env is read, never made, here
+    from ..task.env import KoolioEnv
 
 #: What a table is used for (module doc).
 PURPOSES = ("resume", "start", "keep", "score", "watch", "export", "transfer", "inspect")
@@ -162,7 +163,7 @@ class RunIdentity:
         cfg = env.config
         goal = "random" if env.random_goal else env.goal_name
         sensors, algorithm = sensor_signature(cfg), algorithm_record(cfg.learner)
-        rec = arena_record(env.arena)
+        rec = env.arena.record
         return cls(
             layout=own_layout(env.layout, own_tables) if own_tables else env.layout,
             sensors=_frozen(sensors),
@@ -189,7 +190,7 @@ class RunIdentity:
         """The identity of a run of ``cfg`` that knows no arena (``export``, ``info``):
         its goal and arena are not compared. ``world``: ``--world``'s name (None: the
         configuration's own)."""
-        from ..store.worlds import world_name
+        from .worlds import world_name
 
         return cls(
             layout=KeywordLayout(tuple(state_fields(cfg.sensors))),
@@ -271,6 +272,7 @@ def check(
     the run's own table's). Returns the table's identity.
 
     >>> from koolio_pymunk.store.config import Config
+    >>> from koolio_pymunk.task.env import KoolioEnv
     >>> env = KoolioEnv("room")
     >>> table = QTable(env.layout, RunIdentity.of_config(Config()).header())
     >>> check(table, env, "resume", "t.qtable").algorithm_name
@@ -282,7 +284,7 @@ def check(
     if purpose not in PURPOSES:
         raise ValueError(f"purpose: one of {', '.join(PURPOSES)}, got {purpose!r}")
     say = warn or _stderr
-    mine = RunIdentity.of_run(run) if isinstance(run, KoolioEnv) else run
+    mine = run if isinstance(run, RunIdentity) else RunIdentity.of_run(run)
     if run_id is not None:
         mine = dataclasses.replace(mine, run_id=run_id)
     theirs = RunIdentity.of_table(table, source, mine)
