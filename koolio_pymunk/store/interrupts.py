@@ -165,11 +165,16 @@ class SafeInterrupt:
         return self
 
     def __exit__(self, *exc: object) -> None:
+        # In a command (SIGINT was raise_once's) the interrupt this guard took is the
+        # process's one: what follows (the files closed, the line said) is its handling,
+        # and a later Ctrl-C or SIGTERM is ignored, as raise_once ignores its second. A
+        # caller of the library gets its own handlers back.
+        handled = self.taken and self._previous is raise_once
         if self._installed:
-            signal.signal(signal.SIGINT, self._previous)
+            signal.signal(signal.SIGINT, signal.SIG_IGN if handled else self._previous)
             self._installed = False
         if self._previous_term is signal.SIG_DFL:
-            signal.signal(signal.SIGTERM, signal.SIG_DFL)
+            signal.signal(signal.SIGTERM, signal.SIG_IGN if handled else signal.SIG_DFL)
             self._previous_term = None
 
 

@@ -41,6 +41,30 @@ def test_a_second_ctrl_c_is_ignored_while_the_first_is_handled():
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
 
 
+def test_a_command_ignores_ctrl_c_after_its_guard_took_one():
+    """In a ``koolio-pm`` process (SIGINT is raise_once's) the interrupt a guard took is
+    the one being handled: after the guard, closing the files and saying the line are not
+    cut by another Ctrl-C or SIGTERM (one landed in a finalizer and printed a traceback)."""
+    old_int = signal.signal(signal.SIGINT, interrupts.raise_once)
+    old_term = signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    try:
+        with pytest.raises(KeyboardInterrupt), SafeInterrupt() as guard:
+            ctrl_c()
+            guard.check()
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+        assert signal.getsignal(signal.SIGTERM) is signal.SIG_IGN
+        ctrl_c()  # ignored
+        signal.signal(signal.SIGINT, interrupts.raise_once)
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        with SafeInterrupt():  # a guard that took nothing gives the command's back
+            pass
+        assert signal.getsignal(signal.SIGINT) is interrupts.raise_once
+        assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
+    finally:
+        signal.signal(signal.SIGINT, old_int)
+        signal.signal(signal.SIGTERM, old_term)
+
+
 def test_a_second_ctrl_c_after_the_grace_interrupts_a_stuck_step(monkeypatch):
     monkeypatch.setattr(interrupts, "GRACE_SECONDS", 0.0)
     with SafeInterrupt() as guard:
