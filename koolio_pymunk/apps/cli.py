@@ -764,9 +764,12 @@ def check_discard(env, robots: int) -> None:
 def _check_init_table(init_path: str, store, log: str, run):
     """``--init-qtable``'s checks that need no lock: the table to start from is readable
     and made for the sensors of the run ``run`` (its identity), ``--qtable`` is new, and
-    so is the log."""
+    so is the log. Returns the table the new one starts from: with ``--tables each``, a
+    shared table's rows copied to every robot's own (:meth:`QTable.for_robots
+    <koolio_pymunk.store.qtable.QTable.for_robots>`)."""
     from ..store import run_identity
     from ..store.episode_log import check_log_path, log_rows
+    from ..store.keyword import base_layout, table_robots
     from .export import load_any_table
 
     if store.exists():
@@ -775,6 +778,9 @@ def _check_init_table(init_path: str, store, log: str, run):
             "instead (choose a new --qtable)"
         )
     table = load_any_table(init_path)
+    own = table_robots(run.layout)  # --tables each from a shared table: each its copy
+    if own and not table_robots(table.layout) and table.layout == base_layout(run.layout):
+        table = table.for_robots(own)
     run_identity.check(table, run, "start", init_path, warn=lambda msg: None)
     if log:
         check_log_path(log, store.path)

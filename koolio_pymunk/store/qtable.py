@@ -89,6 +89,7 @@ from .keyword import (
     MAX_LEVELS,
     KeywordLayout,
     base_layout,
+    own_tables,
     robot_offset,
     table_robots,
 )
@@ -192,6 +193,37 @@ class QTable:
                     its.add(state & low, action, [[o[0] & low, *o[1:]] for o in outs])
             sections[SECTION] = its
         return QTable(base, meta, self.q_init, rows, sections)
+
+    def for_robots(self, robots: int) -> QTable:
+        """This table as ``robots`` robots' own rows (``train --tables each --init-qtable``:
+        every robot starts from these values): each row copied to every robot's rows, the
+        header this table's (without a ``robot`` record), Dyna-Q's model copied to each
+        robot's states. The inverse of :meth:`robot_table` for every robot. ``ValueError``
+        when the table already holds robots' own rows, or the keyword would pass 64 bits.
+
+        >>> t = QTable(KeywordLayout((("A", 3),)))
+        >>> t.row(2)[1] = 2.5
+        >>> both = t.for_robots(2)
+        >>> both.layout.fields, sorted(both.rows), both.robot_table(1).rows == t.rows
+        ((('Robot', 2), ('A', 3)), [2, 6], True)
+        """
+        if table_robots(self.layout):
+            raise ValueError("the table holds robots' own rows already")
+        others = sorted(set(self.sections) - {SECTION})
+        if others:
+            raise ValueError(f"data sections ({', '.join(others)}) are not split by robot")
+        layout = own_tables(self.layout, robots)
+        offsets = [robot_offset(layout, k) for k in range(robots)]
+        rows = {k | off: list(v) for off in offsets for k, v in self.rows.items()}
+        meta = {k: v for k, v in self.meta.items() if k != "robot"}
+        sections = {}
+        if SECTION in self.sections:  # each robot's transitions among its own states
+            model, theirs = Model.from_bytes(bytes(self.sections[SECTION])), Model()
+            for off in offsets:
+                for (state, action), outs in zip(model.pairs, model.outcomes):
+                    theirs.add(state | off, action, [[o[0] | off, *o[1:]] for o in outs])
+            sections[SECTION] = theirs
+        return QTable(layout, meta, self.q_init, rows, sections)
 
     # -- bytes ----------------------------------------------------------------------
     def to_bytes(self) -> bytes:

@@ -173,3 +173,33 @@ def test_export_of_one_robot_splits_dyna_models_by_robot(here, capsys) -> None:
         assert [[o[0] for o in outs] for outs in its.outcomes] == [
             [o[0] & low for o in whole.outcomes[i]] for i in mine
         ]
+
+
+def test_own_rows_start_from_a_shared_table_with_init_qtable(here, capsys) -> None:
+    """``--tables each --init-qtable SHARED``: every robot's own rows start as the shared
+    table's rows (and its Dyna-Q model as the shared model), then learn apart; a table of
+    own rows does not start a shared run or one of another number of robots."""
+    from koolio_pymunk.store.dyna_model import SECTION
+
+    (here / "dyna.yaml").write_text("episode: {max_steps: 40}\nlearner: {algorithm: dyna}\n")
+    two = ["--robots", "2", "--shared-arena", "--config", "dyna.yaml"]
+    assert run(capsys, "train", *two, "--episodes", "6", "--quiet")[0] == 0
+    shared = load_qtable(here / "runs" / "hallway.qtable")
+    each = ["train", *two, "--tables", "each", "--qtable", "o.qtable", "--log", "o.csv"]
+    code, out, _ = run(capsys, *each, "--episodes", "6", "--init-qtable", "runs/hallway.qtable")
+    assert code == 0 and f"from runs/hallway.qtable ({2 * len(shared)} states" in out
+    own = load_qtable(here / "o.qtable")
+    assert table_robots(own.layout) == 2 and own.meta["episodes"] == 6
+    for k in (0, 1):
+        mine = own.robot_table(k)
+        assert mine.rows == shared.rows and mine.sections[SECTION] == shared.sections[SECTION]
+    assert run(capsys, *each, "--episodes", "9", "--quiet")[0] == 0
+    after = load_qtable(here / "o.qtable")
+    assert after.meta["episodes"] == 9 and after.robot_table(0).rows != after.robot_table(1).rows
+    three = ["train", "--robots", "3", "--shared-arena", "--tables", "each"]
+    for argv, words in (
+        ([*three, "--qtable", "t.qtable", "--log", "t.csv"], ["own rows of 2 robots"]),
+        (["train", *two, "--qtable", "s.qtable", "--log", "s.csv"], ["own rows of 2 robots"]),
+    ):
+        argv = [*argv, "--config", "dyna.yaml", "--init-qtable", "o.qtable"]
+        expect_error(capsys, here, argv, *words)
