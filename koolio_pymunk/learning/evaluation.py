@@ -244,11 +244,10 @@ class Check:
 class PeriodicCheck:
     """The periodic greedy check of a training run (module doc), writing through the
     run's :class:`~koolio_pymunk.store.check_files.CheckFiles` (opened, checked and
-    locked before the run writes anything; the check closes them).
+    locked before the run writes anything, and closed, by the run).
 
     :meth:`resume` brings the files in step with the run's table; :meth:`due` says
-    whether a table of that many episodes is to be checked; :meth:`check` checks it;
-    :meth:`close` releases the files.
+    whether a table of that many episodes is to be checked; :meth:`check` checks it.
     """
 
     def __init__(
@@ -321,7 +320,3 @@ class PeriodicCheck:
         self.files.append(c.row())
         self.last = episode
         return c
-
-    def close(self) -> None:
-        """Release the evaluations file's and the best table's locks."""
-        self.files.close()

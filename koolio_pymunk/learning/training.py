@@ -234,42 +234,43 @@ def train(
         if check_files is not None:
             check_files.close()
         raise
-    files.save_every = max(1, save_every if save_every is not None else robots)
-    files.save_seconds = save_seconds
-    table, first = files.table, files.first
-    agents = [make_learner(table, cfg.learner, None) for _ in range(n)]
-    checker = None
-    if check_files is not None:
-        checker = PeriodicCheck(check_files, eval_every, eval_episodes, seed,
-                                shared_robots=n if shared_arena else 0)  # fmt: skip
-    journal = discard_unfinished and n > 1
-    loop = make_robots(
-        env, agents, seed, TRAIN_STREAM, compiled=compiled, journal=journal, shared=shared_arena
-    )
-    files.before_save = loop.sync_table
-    files.changed_rows = loop.changed_rows
+    loop: Robots | None = None  # made below: the files are closed whatever fails first
     scalars = None
-    if tensorboard is not None:
-        from .scalars import RunScalars, logged_steps
-
-        scalars = RunScalars(tensorboard, logged_steps(log_path))
-    progress = Progress()
-    results: list[EpisodeResult] = []
-    checks: list[Check] = []
-    last_report = time.perf_counter()
-    interrupted = False
-    started = finished = 0
-    tail = f"  robots {n}" if robots > 1 else ""
-
-    def start(r: int) -> None:
-        nonlocal started
-        if started < episodes:
-            loop.begin(r, first + started)
-            started += 1
-        else:
-            loop.release(r)
-
     try:
+        files.save_every = max(1, save_every if save_every is not None else robots)
+        files.save_seconds = save_seconds
+        table, first = files.table, files.first
+        agents = [make_learner(table, cfg.learner, None) for _ in range(n)]
+        checker = None
+        if check_files is not None:
+            checker = PeriodicCheck(check_files, eval_every, eval_episodes, seed,
+                                    shared_robots=n if shared_arena else 0)  # fmt: skip
+        journal = discard_unfinished and n > 1
+        loop = make_robots(
+            env, agents, seed, TRAIN_STREAM, compiled=compiled, journal=journal, shared=shared_arena
+        )
+        files.before_save = loop.sync_table
+        files.changed_rows = loop.changed_rows
+        if tensorboard is not None:
+            from .scalars import RunScalars, logged_steps
+
+            scalars = RunScalars(tensorboard, logged_steps(log_path))
+        progress = Progress()
+        results: list[EpisodeResult] = []
+        checks: list[Check] = []
+        last_report = time.perf_counter()
+        interrupted = False
+        started = finished = 0
+        tail = f"  robots {n}" if robots > 1 else ""
+
+        def start(r: int) -> None:
+            nonlocal started
+            if started < episodes:
+                loop.begin(r, first + started)
+                started += 1
+            else:
+                loop.release(r)
+
         with SafeInterrupt() as guard:
             try:
                 if checker is not None:
@@ -318,15 +319,16 @@ def train(
                 table = _interrupted(loop, files, discard_unfinished, results, report, finished)
     finally:
         try:
-            loop.sync()  # the envs and learners as the Python steps would leave them
+            if loop is not None:
+                loop.sync()  # the envs and learners as the Python steps would leave them
             if scalars is not None:
                 scalars.close()
         finally:
             try:
                 files.close()
             finally:
-                if checker is not None:
-                    checker.close()
+                if check_files is not None:
+                    check_files.close()
     return TrainResult(
         table,
         progress.episodes,

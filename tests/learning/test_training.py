@@ -153,3 +153,23 @@ def test_the_run_identity_takes_the_arena_its_env_loaded(tmp_path) -> None:
     assert (mine.goal, mine.home_goal) == (first, other)
     assert RunIdentity.of_run(chosen.sibling()) == mine
     assert RunIdentity.of_run(env.sibling()) == run
+
+
+def test_a_run_that_fails_before_its_first_episode_releases_its_files(tmp_path, monkeypatch):
+    """A failure between opening the run's files and its first episode (a Ctrl-C during
+    the first compile, say) closes the table, the log and the checks' files: their locks
+    are released, even while the traceback is kept (as an interactive session keeps the
+    last one), whose frames would otherwise hold them."""
+    from koolio_pymunk.learning import engine
+    from koolio_pymunk.store import locks
+
+    def stopped(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(engine, "robots", stopped)
+    q, log = tmp_path / "q.qtable", tmp_path / "q.csv"
+    with pytest.raises(KeyboardInterrupt) as kept:
+        train(KoolioEnv("room"), QTableStore(q), 2, 0, log, report=None, eval_every=1)
+    for f in (q, log, tmp_path / "q.evals.csv", tmp_path / "q.best.qtable"):
+        assert locks._held(locks.lock_path(f)) is None, f
+    assert kept.traceback  # the frames were alive while the locks were looked at
