@@ -168,6 +168,19 @@ def add_robots_args(p: argparse.ArgumentParser, robots_help: str) -> None:
     )
 
 
+def add_tables_arg(p: argparse.ArgumentParser) -> None:
+    """``--tables shared|each`` (train, view): with ``--robots N --shared-arena``, one
+    table all robots learn into, or each robot its own rows of it."""
+    p.add_argument(
+        "--tables",
+        choices=("shared", "each"),
+        default="shared",
+        help="with --robots N --shared-arena: one table all robots learn into (shared, the "
+        "default) or each robot its own rows of it (each: the keyword leads with the "
+        "robot's index; docs/multi-robot.md)",
+    )
+
+
 def check_shared_arena(args: argparse.Namespace, env) -> None:
     """``--shared-arena``'s combinations, before any file is touched: it needs --robots N
     with N >= 2, and the robots must fit their start areas (one line each)."""
@@ -291,14 +304,7 @@ def build_parser() -> argparse.ArgumentParser:
         "robots learning into one shared table, each in its own copy of the arena (default 1; "
         "with --shared-arena all in one)",
     )
-    p.add_argument(
-        "--tables",
-        choices=("shared", "each"),
-        default="shared",
-        help="with --robots N --shared-arena: one table all robots learn into (shared, the "
-        "default) or each robot its own rows of it (each: the keyword leads with the "
-        "robot's index; docs/multi-robot.md)",
-    )
+    add_tables_arg(p)
     p.add_argument(
         "--init-qtable",
         default=None,

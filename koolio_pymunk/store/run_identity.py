@@ -177,12 +177,16 @@ class RunIdentity:
         )
 
     @classmethod
-    def of_robots(cls, env: KoolioEnv, robots: int, table: QTable | None) -> RunIdentity:
+    def of_robots(
+        cls, env: KoolioEnv, robots: int, table: QTable | None, each: bool = False
+    ) -> RunIdentity:
         """The identity of ``robots`` robots sharing ``env``'s arena (1: a robot alone)
         that play or learn ``table`` (``eval``, ``view``; None: a new table, one all
-        share): they have their own rows when the table holds each robot's (``train
-        --tables each``), so the check compares their number with the table's."""
-        own = table is not None and robots > 1 and table_robots(table.layout) > 0
+        share unless ``each``, ``view --tables each``): they have their own rows when
+        the table holds each robot's (``train --tables each``) or ``each`` asks for them,
+        so the check compares their number with the table's."""
+        held = table is not None and table_robots(table.layout) > 0
+        own = robots > 1 and (held or each)
         return cls.of_run(env, robots if own else 0)
 
     @classmethod

@@ -203,3 +203,22 @@ def test_own_rows_start_from_a_shared_table_with_init_qtable(here, capsys) -> No
     ):
         argv = [*argv, "--config", "dyna.yaml", "--init-qtable", "o.qtable"]
         expect_error(capsys, here, argv, *words)
+
+
+def test_the_window_learns_own_rows_with_tables_each(here, capsys) -> None:
+    """``view --robots N --shared-arena --tables each`` makes a new table of each robot's
+    own rows, which ``train --tables each`` resumes; a shared table is not learned on as
+    own rows in the window either."""
+    two = ["--robots", "2", "--shared-arena", "--config", "tiny.yaml"]
+    view = ["view", *two, "--tables", "each", "--episodes", "4", "--qtable", "v.qtable"]
+    code, out, _ = run(capsys, *view)
+    assert code == 0 and "learning into v.qtable (each robot its own rows), a new table" in out
+    table = load_qtable(here / "v.qtable")
+    assert table_robots(table.layout) == 2 and table.meta["episodes"] == 4
+    assert {_robot_of(table.layout, key) for key in table.rows} == {0, 1}
+    train = ["train", *two, "--tables", "each", "--episodes", "6", "--qtable", "v.qtable"]
+    assert run(capsys, *train, "--quiet")[0] == 0
+    assert load_qtable(here / "v.qtable").meta["episodes"] == 6
+    assert run(capsys, "view", *two, "--episodes", "2", "--qtable", "s.qtable")[0] == 0
+    learn = ["view", *two, "--tables", "each", "--learn", "--episodes", "2", "--qtable", "s.qtable"]
+    expect_error(capsys, here, learn, "one table all robots share", "--tables each")

@@ -119,7 +119,7 @@ MAX_STEPS = 10**12
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """The flags of ``train`` plus the window's own."""
-    from ..cli import add_env_args, add_learning_files_args, add_robots_args
+    from ..cli import add_env_args, add_learning_files_args, add_robots_args, add_tables_arg
     from ..flags import MAX_EPISODES, file_name, float_type, int_type
 
     add_env_args(p)
@@ -138,6 +138,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "train's parallel data collection, nothing to watch in one window): select one with "
         "Tab / Shift+Tab or a click, a step is then a tick (every robot one step)",
     )
+    add_tables_arg(p)
     p.add_argument(
         "--discard-unfinished",
         action="store_true",
@@ -264,9 +265,10 @@ def run(args: argparse.Namespace) -> int:
         # and, as eval, a table of no episodes or of another world is said so
         watched_table(env, args.qtable, warn=False, robots=args.robots)
     else:  # a table that holds each robot's own rows is learned as train --tables each
-        RunFiles.check(RunIdentity.of_robots(env, args.robots, store.peek()), store, args.log)
+        run = RunIdentity.of_robots(env, args.robots, store.peek(), each=args.tables == "each")
+        RunFiles.check(run, store, args.log)
     announce_compile(env)
-    shared = {"robots": args.robots} if args.shared_arena else {}
+    shared = {"robots": args.robots, "each": args.tables == "each"} if args.shared_arena else {}
     session = (SharedSession if shared else Session)(
         env,
         args.qtable,
@@ -312,6 +314,7 @@ def opening_line(session: Any, existed: bool, asked: bool = True) -> str:
     """``view``'s first line: the table it learns into (new, or how many episodes it
     holds) or watches; ``existed``: the table was there before; ``asked``: ``--greedy``
     was given (else say how to learn)."""
+    from ...store.keyword import table_robots
     from ..cli import count
 
     table = session.table_path
@@ -324,7 +327,9 @@ def opening_line(session: Any, existed: bool, asked: bool = True) -> str:
         )
     log = f" (log {session.log_path})" if session.log_path else " (no log)"
     held = f"which holds {count(session.first, 'episode')}" if existed else "a new table"
-    return f"view: {robots_words(session)}learning into {table}, {held}{log}"
+    own = table_robots(session.table.layout) > 0
+    rows = " (each robot its own rows)" if own else ""
+    return f"view: {robots_words(session)}learning into {table}{rows}, {held}{log}"
 
 
 def robots_words(session: Any) -> str:

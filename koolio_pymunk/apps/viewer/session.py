@@ -148,7 +148,9 @@ class Session:
         self.files: RunFiles | None = None
         if self.learn:  # the table and the log locked while the window learns
             store = QTableStore(qtable, purpose="koolio-pm view")
-            run = run_identity.RunIdentity.of_robots(env, self.asked_robots, store.peek())
+            run = run_identity.RunIdentity.of_robots(
+                env, self.asked_robots, store.peek(), each=self.each
+            )
             self.files = RunFiles.open(run, store, log, "koolio-pm view", seed)
             self.table = self.files.table
             self.first = self.files.first
@@ -174,6 +176,8 @@ class Session:
     n_robots = asked_robots = 1
     """Robots in the window (:class:`SharedSession`: several), and how many were asked
     for (the window runs no more robots than episodes)."""
+    each = False
+    """A new table holds each robot's own rows (``view --tables each``)."""
     selected = 0
     """The robot the panels show."""
 
@@ -311,13 +315,14 @@ class SharedSession(Session):
         episodes: int | None = None,
         log: str | Path | None = None,
         greedy: bool = False,
+        each: bool = False,
     ) -> None:
         from ...task.shared_arena import SharedArena
 
         if robots < 2:
             raise ValueError("a shared arena's session needs at least two robots")
         n = robots if not episodes else max(1, min(robots, episodes))  # train's count
-        self.n_robots, self.asked_robots = n, robots
+        self.n_robots, self.asked_robots, self.each = n, robots, each
         self.envs = SharedArena.of(env, n)
         self.selected = 0
         self.started = 0
