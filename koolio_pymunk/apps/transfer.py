@@ -416,6 +416,8 @@ def obtain_table(
         report=report,
         report_every=10.0,
     )
+    if result.interrupted:  # Ctrl-C or SIGTERM, taken by train: its files saved; stop here
+        raise KeyboardInterrupt
     return result.table, f"{folder.name}/{name}", result.seconds
 
 

@@ -136,6 +136,27 @@ def test_transfer_command_end_to_end_and_reproducible(tmp_path, capsys) -> None:
             assert same_run(a, b), name
 
 
+def test_a_training_stage_stopped_by_ctrl_c_stops_the_experiment(tmp_path, monkeypatch) -> None:
+    """Ctrl-C (or SIGTERM) taken by a training stage stops the whole experiment (exit 130,
+    the stage's table kept) instead of going on with a half-trained table; later Ctrl-Cs
+    are ignored by then, so nothing else could stop it."""
+    import dataclasses
+
+    from koolio_pymunk.apps import transfer as experiment
+
+    real, calls = experiment.train, []
+
+    def stopped(*args, **kwargs):
+        calls.append(args[1].path.name)
+        return dataclasses.replace(real(*args, **kwargs), interrupted=True)
+
+    monkeypatch.setattr(experiment, "train", stopped)
+    assert transfer(tmp_path, "a", "--seed", "0", "1") == 130
+    assert calls == ["ideal.qtable"]  # no later stage or seed ran
+    assert (tmp_path / "a" / "seed-0" / "ideal.qtable").exists()
+    assert not (tmp_path / "a" / "transfer.json").exists()
+
+
 def _has_matplotlib() -> bool:
     try:
         import matplotlib  # noqa: F401
