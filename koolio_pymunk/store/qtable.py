@@ -177,17 +177,15 @@ class QTable:
         if not 0 <= robot < own:
             held = f"the rows of robots 0..{own - 1}" if own else "no robot's own rows"
             raise ValueError(f"no robot {robot}'s own rows: the table holds {held}")
-        others = sorted(set(self.sections) - {SECTION})
-        if others:
-            raise ValueError(f"data sections ({', '.join(others)}) are not split by robot")
+        model = self._model_by_robot()
         base = base_layout(self.layout)
         low = robot_offset(self.layout, 1) - 1
         mine = robot_offset(self.layout, robot)
         rows = {k & low: list(v) for k, v in self.rows.items() if k & ~low == mine}
         meta = dict(self.meta) | {"robot": {"index": robot, "of": own}}
         sections = {}
-        if SECTION in self.sections:  # a robot's transitions stay among its own states
-            model, its = Model.from_bytes(bytes(self.sections[SECTION])), Model()
+        if model is not None:  # a robot's transitions stay among its own states
+            its = Model()
             for (state, action), outs in zip(model.pairs, model.outcomes):
                 if state & ~low == mine:
                     its.add(state & low, action, [[o[0] & low, *o[1:]] for o in outs])
@@ -209,21 +207,31 @@ class QTable:
         """
         if table_robots(self.layout):
             raise ValueError("the table holds robots' own rows already")
-        others = sorted(set(self.sections) - {SECTION})
-        if others:
-            raise ValueError(f"data sections ({', '.join(others)}) are not split by robot")
+        model = self._model_by_robot()
         layout = own_tables(self.layout, robots)
         offsets = [robot_offset(layout, k) for k in range(robots)]
         rows = {k | off: list(v) for off in offsets for k, v in self.rows.items()}
         meta = {k: v for k, v in self.meta.items() if k != "robot"}
         sections = {}
-        if SECTION in self.sections:  # each robot's transitions among its own states
-            model, theirs = Model.from_bytes(bytes(self.sections[SECTION])), Model()
+        if model is not None:  # each robot's transitions among its own states
+            theirs = Model()
             for off in offsets:
                 for (state, action), outs in zip(model.pairs, model.outcomes):
                     theirs.add(state | off, action, [[o[0] | off, *o[1:]] for o in outs])
             sections[SECTION] = theirs
         return QTable(layout, meta, self.q_init, rows, sections)
+
+    def _model_by_robot(self) -> Model | None:
+        """Dyna-Q's model, for :meth:`robot_table` and :meth:`for_robots` to split or join
+        by robot (None: the table has none; read, not parsed again, when the table was
+        read); ``ValueError`` for any other data section, which neither can split."""
+        others = sorted(set(self.sections) - {SECTION})
+        if others:
+            raise ValueError(f"data sections ({', '.join(others)}) are not split by robot")
+        found = self.sections.get(SECTION)
+        if found is None or isinstance(found, Model):
+            return found
+        return Model.from_bytes(bytes(found))  # bytes put in by hand
 
     # -- bytes ----------------------------------------------------------------------
     def to_bytes(self) -> bytes:
