@@ -21,7 +21,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import Any
 
 from . import run_identity
 from .episode_log import LogWriter, check_in_step, check_log_path, log_rows
@@ -29,9 +29,6 @@ from .errors import KoolioError, located
 from .locks import check_lock_file
 from .qtable import QTable, QTableStore
 from .run_identity import RunIdentity
-
-if TYPE_CHECKING:  # a finished episode's result is read, never made, here
-    from ..learning.episodes import EpisodeResult
 
 #: With ``--fsync second``: the longest time between two durable snapshots of the table
 #: (what a power loss can lose), seconds.
@@ -163,9 +160,10 @@ class RunFiles:
             check_in_step(log_path, int(table.meta.get("episodes", 0)), store.path, rules)
         return table
 
-    def finished(self, res: EpisodeResult, save: bool = False) -> None:
-        """Record finished episode ``res``: the table's count, the table kept when due
-        (:meth:`keep`; ``save``: a snapshot now), the row."""
+    def finished(self, res: Any, save: bool = False) -> None:
+        """Record finished episode ``res`` (an
+        :class:`~koolio_pymunk.learning.episodes.EpisodeResult`): the table's count, the
+        table kept when due (:meth:`keep`; ``save``: a snapshot now), the row."""
         self.table.meta["episodes"] = res.episode + 1
         self.unsaved += 1
         late = self.save_seconds is not None and (
@@ -205,7 +203,7 @@ class RunFiles:
         if self.unsaved or self.undurable:
             self.save()
 
-    def folded(self, *results: EpisodeResult) -> None:
+    def folded(self, *results: Any) -> None:
         """Record unfinished episodes whose updates stay in the table (Exit): the table
         saved (its episode count unchanged), each row logged ``interrupted``."""
         self.save()

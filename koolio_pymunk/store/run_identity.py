@@ -56,7 +56,7 @@ import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 from . import provenance
 from .config import (
@@ -75,8 +75,22 @@ from .keyword import own_tables as own_layout
 from .qtable import QTable
 from .worlds import IDEAL, world_label
 
-if TYPE_CHECKING:  # an env is read, never made, here
-    from ..task.env import KoolioEnv
+
+class RunEnv(Protocol):
+    """What :meth:`RunIdentity.of_run` reads of a run's env (a
+    :class:`~koolio_pymunk.task.env.KoolioEnv`, which this floor never imports)."""
+
+    config: Config
+    layout: KeywordLayout
+    arena: Any
+    """Its :attr:`record` is what a table records of the arena."""
+    goal_name: str
+    home_goal: str
+    random_goal: bool
+    world_name: str
+    randomizer: Any
+    """Its ``columns`` are the log's realism columns."""
+
 
 #: What a table is used for (module doc).
 PURPOSES = ("resume", "start", "keep", "score", "watch", "export", "transfer", "inspect")
@@ -154,7 +168,7 @@ class RunIdentity:
         return isinstance(rec, dict) and rec.get("no_undo") is True
 
     @classmethod
-    def of_run(cls, env: KoolioEnv, own_tables: int = 0) -> RunIdentity:
+    def of_run(cls, env: RunEnv, own_tables: int = 0) -> RunIdentity:
         """The identity of a run in ``env`` (its configuration, arena, goal and world),
         from what the env holds: the arena it loaded (its file is not read again), its
         goal, its world. ``own_tables`` N > 0: N robots each with its own rows of the
@@ -178,7 +192,7 @@ class RunIdentity:
 
     @classmethod
     def of_robots(
-        cls, env: KoolioEnv, robots: int, table: QTable | None, each: bool = False
+        cls, env: RunEnv, robots: int, table: QTable | None, each: bool = False
     ) -> RunIdentity:
         """The identity of ``robots`` robots sharing ``env``'s arena (1: a robot alone)
         that play or learn ``table`` (``eval``, ``view``; None: a new table, one all
@@ -263,7 +277,7 @@ def _frozen(value: Any) -> str | None:
 
 def check(
     table: QTable,
-    run: KoolioEnv | RunIdentity,
+    run: RunEnv | RunIdentity,
     purpose: str,
     source: str,
     warn: Callable[[str], None] | None = None,
