@@ -708,7 +708,7 @@ def step_costs(
     from koolio_pymunk.sensing.reading_kernel import reading_group, sense_reading
     from koolio_pymunk.store.qtable import QTable
     from koolio_pymunk.world.segment_query import wall_array
-    from koolio_pymunk.world.swept_move import act
+    from koolio_pymunk.world.swept_move import act, world_group
 
     @numba.njit
     def sensing(pts, hs, rng, sense, keys):
@@ -742,7 +742,7 @@ def step_costs(
         run.step()
         actions[i] = env.last_action
     sense = reading_group(env.sensors)
-    world = (wall_array(env.world), env.world.radius, float(env.move_distance), float(env.turn_arc))
+    world = world_group(wall_array(env.world), env.world.radius, env.move_distance, env.turn_arc)
     m = env.motion
     motion = (
         np.zeros(5)

@@ -57,6 +57,7 @@ from ..task.step_kernel import (
     EVENTS,
     F_RETURN,
     I_BUMPS,
+    I_CHECK_RESCUE,
     I_HAS_BEEN_RESCUED,
     I_STEPS,
     RUNNING,
@@ -64,6 +65,7 @@ from ..task.step_kernel import (
     WRONG_DOOR_CODE,
     rescue_check_inline,
     simulate_inline,
+    simulate_robot,
 )
 from .episodes import (
     TRAIN_STREAM,
@@ -146,12 +148,13 @@ def _step(r: int, gens, agens, readings, world, motion, task, memory, ints, floa
     if lambda_on and explored and not_greedy_inline(index, q, state, action, bar):
         t_meta[0] = 0  # Watkins's cut
     lints[r, L_LAST] = action
-    rng, sense = gens[r], robot_group(r, readings[0], readings[1])
+    rng = gens[r]
     if among is None:  # a robot alone (numba prunes the other branch)
-        nxt, code, reward, terminated, truncated = simulate_inline(
-            r, action, rng, sense, world, motion, task, memory, ints, floats, mem, None
+        nxt, code, reward, terminated, truncated = simulate_robot(
+            r, action, rng, readings, world, motion, task, memory, ints, floats, mem
         )
     else:
+        sense = robot_group(r, readings[0], readings[1])
         nxt, code, reward, terminated, truncated = simulate_inline(
             r, action, rng, sense, world, motion, task, memory, ints, floats, mem,
             robot_others(r, among[0], among[1], among[2]),
@@ -165,7 +168,10 @@ def _step(r: int, gens, agens, readings, world, motion, task, memory, ints, floa
         else:
             update_inline(index, table, alpha, gamma, state, action, reward, nxt, terminated, r,
                    journal)  # fmt: skip
-    if among is None:
+    if ints[r, I_CHECK_RESCUE] == 0:  # rescue_check's own first test: no rescue due
+        rescued = False
+    elif among is None:
+        sense = robot_group(r, readings[0], readings[1])
         rescued = rescue_check_inline(r, rng, sense, world, task, memory, ints, floats, mem, None)
     else:
         rescued = rescue_check_inline(r, rng, sense, world, task, memory, ints, floats, mem,

@@ -32,22 +32,34 @@ ensure_fresh()  # numba's cache, in step with every kernel's source (see there)
 
 
 @numba.njit(cache=True, inline="always")
-def _numpy_sum(values: np.ndarray, n: int) -> float:
-    """``np.add.reduce`` of ``values[:n]`` (contiguous float64, n <= 128), bit for bit."""
+def _numpy_sum(values: np.ndarray, members: np.ndarray, start: int, n: int) -> float:
+    """``np.add.reduce`` of the ``n`` values ``values[members[start:start + n]]`` (float64,
+    n <= 128), bit for bit: numpy's pairwise sum, its eight partial sums as scalars (no
+    array to allocate)."""
     if n < 8:
         res = 0.0
         for i in range(n):
-            res += values[i]
+            res += values[members[start + i]]
         return res
-    r = values[:8].copy()
+    r0, r1 = values[members[start]], values[members[start + 1]]
+    r2, r3 = values[members[start + 2]], values[members[start + 3]]
+    r4, r5 = values[members[start + 4]], values[members[start + 5]]
+    r6, r7 = values[members[start + 6]], values[members[start + 7]]
     i = 8
     while i < n - n % 8:
-        for j in range(8):
-            r[j] += values[i + j]
+        b = start + i
+        r0 += values[members[b]]
+        r1 += values[members[b + 1]]
+        r2 += values[members[b + 2]]
+        r3 += values[members[b + 3]]
+        r4 += values[members[b + 4]]
+        r5 += values[members[b + 5]]
+        r6 += values[members[b + 6]]
+        r7 += values[members[b + 7]]
         i += 8
-    res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]))
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
     while i < n:
-        res += values[i]
+        res += values[members[start + i]]
         i += 1
     return res
 
@@ -113,13 +125,11 @@ def readout(raw: np.ndarray, draws: np.ndarray, encoding: tuple, out: np.ndarray
     for i in range(n_sonar, n_sonar + 2 * n_cam):
         codes[n_codes] = _code(out[i], camera_thresholds)
         n_codes += 1
-    buf = np.empty(max(1, group_members.shape[0]))
     start = 0
     for g in range(group_sizes.shape[0]):
         size = group_sizes[g]
-        for j in range(size):
-            buf[j] = out[group_members[start + j]]
-        codes[n_codes] = _code(_numpy_sum(buf, size) / size, sonar_thresholds)
+        codes[n_codes] = _code(_numpy_sum(out, group_members, start, size) / size,
+                               sonar_thresholds)  # fmt: skip
         n_codes += 1
         start += size
     if compass_in_state:

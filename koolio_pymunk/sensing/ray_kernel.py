@@ -93,6 +93,13 @@ def new_trig(n_rays: int, n_robots: int | None = None) -> np.ndarray:
     return out
 
 
+def new_wall_lists(walls: np.ndarray) -> np.ndarray:
+    """Room for :func:`sense_one`'s two lists of walls (near the robot, near one sonar's
+    rays) for the ``(n_walls, 10)`` ``walls``: working space, its contents never read
+    across readings (robots read one after another may share it)."""
+    return np.zeros((2, walls.shape[0]), np.int64)
+
+
 # -- kernels -------------------------------------------------------------------------------
 
 
@@ -190,24 +197,26 @@ def sense_one(x: float, y: float, h: float, geometry: tuple, goal: np.ndarray, p
     doors' plates) in its arc and in sight (far: none).
     ``trig`` (:func:`new_trig`) caches every ray's unit vector for the last few headings:
     in the ideal world moves and stops keep the heading and turns often come back to one,
-    so few readings turn the rays (the values are the same either way).
+    so few readings turn the rays (the values are the same either way). ``wall_lists``
+    (``(2, n_walls)`` int64, :func:`new_wall_lists`) is where the reading lists the walls
+    near the robot and near each sonar's rays: the reading allocates nothing.
     """
     ray_offsets, ray_units, params, camera_dirs, markers, walls = geometry
-    raw, rays, eow_k, trig, ray_cos, decoy = buffers
+    raw, rays, eow_k, trig, ray_cos, decoy, wall_lists = buffers
     length = params[0]
     radius = params[1]
     far = params[2]
     half_arc = params[3]
     n_sonar = ray_offsets.shape[0]
     n_cam = camera_dirs.shape[0]
-    near = np.empty(walls.shape[0], np.int64)
+    near = wall_lists[0]
     n_near = near_walls(x, y, length, walls, near)
     if params[4] == 1.0:
         _sense_cones(x, y, h, ray_offsets, params, walls, near, n_near, raw, rays)
     else:
         directions = _ray_directions(h, ray_units, trig)
         _sense_sub_arcs(x, y, ray_offsets, params, walls, near, n_near, raw, rays, directions,
-                        ray_cos)  # fmt: skip
+                        ray_cos, wall_lists[1])  # fmt: skip
     goal2 = goal.reshape(1, 2)
     for c in range(n_cam):
         direction = h + camera_dirs[c]
@@ -270,20 +279,25 @@ def _sense_cones(
 
 
 @numba.njit(cache=True, inline="always")
-def _fan_ends(
-    x: float, y: float, s: int, n_sub: int, n_rays: int, length: float, trig: np.ndarray,
-    ends: np.ndarray,
-) -> tuple[float, float, float, float]:  # fmt: skip
-    """Sonar ``s``'s sub-arc rays from ``(x, y)``: their ends into ``ends`` and the box
-    ``(x0, y0, x1, y1)`` around the robot and them (``trig``: a cache row of
+def _ray_end(
+    x: float, y: float, s: int, i: int, n_sub: int, n_rays: int, length: float,
+    trig: np.ndarray,
+) -> tuple[float, float]:  # fmt: skip
+    """The end of sonar ``s``'s sub-arc ray ``i`` from ``(x, y)`` (``trig``: a cache row of
     :func:`_ray_directions`)."""
+    return x + length * trig[1 + s * n_sub + i], y + length * trig[1 + n_rays + s * n_sub + i]
+
+
+@numba.njit(cache=True, inline="always")
+def _fan_box(
+    x: float, y: float, s: int, n_sub: int, n_rays: int, length: float, trig: np.ndarray
+) -> tuple[float, float, float, float]:
+    """The box ``(x0, y0, x1, y1)`` around the robot at ``(x, y)`` and the ends of sonar
+    ``s``'s sub-arc rays (:func:`_ray_end`)."""
     x0 = x1 = x
     y0 = y1 = y
     for i in range(n_sub):
-        ex = x + length * trig[1 + s * n_sub + i]
-        ey = y + length * trig[1 + n_rays + s * n_sub + i]
-        ends[i, 0] = ex
-        ends[i, 1] = ey
+        ex, ey = _ray_end(x, y, s, i, n_sub, n_rays, length, trig)
         x0 = min(x0, ex)
         x1 = max(x1, ex)
         y0 = min(y0, ey)
@@ -304,23 +318,24 @@ def _sense_sub_arcs(
     rays: np.ndarray,
     trig: np.ndarray,
     ray_cos: np.ndarray,
+    active: np.ndarray,
 ) -> None:
     """The paper's model: the nearest hit over each sonar's sub-arc rays (``trig``: one
-    cache row of :func:`_ray_directions`). With ``params[6]`` 1 (the realism incidence
-    model) also each ray's incidence cosine ``|cos(angle) nx + sin(angle) ny|`` on the
-    wall it hits (its unit normal; 0 when nothing is hit) in ``ray_cos``."""
+    cache row of :func:`_ray_directions`; ``active``: room for the walls near a sonar's
+    rays). With ``params[6]`` 1 (the realism incidence model) also each ray's incidence
+    cosine ``|cos(angle) nx + sin(angle) ny|`` on the wall it hits (its unit normal; 0
+    when nothing is hit) in ``ray_cos``."""
     length, radius, far = params[0], params[1], params[2]
     incidence = params[6] == 1.0
     n_sonar, n_sub = ray_offsets.shape
     n_rays = n_sonar * n_sub
-    active = np.empty(walls.shape[0], np.int64)
-    ends = np.empty((n_sub, 2))
     for s in range(n_sonar):
-        x0, y0, x1, y1 = _fan_ends(x, y, s, n_sub, n_rays, length, trig, ends)
+        x0, y0, x1, y1 = _fan_box(x, y, s, n_sub, n_rays, length, trig)
         n = walls_in_box(x0, y0, x1, y1, walls, near, n_near, active)
         nearest = np.inf
         for i in range(n_sub):
-            alpha, k = first_hit(x, y, ends[i, 0] - x, ends[i, 1] - y, walls, active, n)
+            ex, ey = _ray_end(x, y, s, i, n_sub, n_rays, length, trig)
+            alpha, k = first_hit(x, y, ex - x, ey - y, walls, active, n)
             d = alpha * length
             rays[s, i] = d
             nearest = min(nearest, d)
@@ -351,8 +366,9 @@ def sense_batch(
     no_plates = np.empty((0, 2))
     no_cos = np.empty((0, 0))
     no_decoy = np.empty(0)
+    wall_lists = np.empty((2, geometry[5].shape[0]), np.int64)
     for r in range(xs.shape[0]):
-        buffers = (raw[r], rays[r], eow_k[r], trig[r], no_cos, no_decoy)
+        buffers = (raw[r], rays[r], eow_k[r], trig[r], no_cos, no_decoy, wall_lists)
         sense_one_inline(xs[r], ys[r], hs[r], geometry, goals[r], no_plates, buffers)
 
 
@@ -452,7 +468,7 @@ def _sense_cones_among(
 def _sense_sub_arcs_among(
     x: float, y: float, ray_offsets: np.ndarray, params: np.ndarray, walls: np.ndarray,
     near: np.ndarray, n_near: int, raw: np.ndarray, rays: np.ndarray, trig: np.ndarray,
-    ray_cos: np.ndarray, robots: np.ndarray, near_r: np.ndarray, n_r: int,
+    ray_cos: np.ndarray, active: np.ndarray, robots: np.ndarray, near_r: np.ndarray, n_r: int,
     ray_robot: np.ndarray, sonar_robot: np.ndarray,
 ) -> None:  # fmt: skip
     """:func:`_sense_sub_arcs` with the robots ``near_r[:n_r]``: each ray's first wall,
@@ -469,11 +485,9 @@ def _sense_sub_arcs_among(
     incidence = params[6] == 1.0
     n_sonar, n_sub = ray_offsets.shape
     n_rays = n_sonar * n_sub
-    active = np.empty(walls.shape[0], np.int64)
     active_r = np.empty(n_r, np.int64)
-    ends = np.empty((n_sub, 2))
     for s in range(n_sonar):
-        x0, y0, x1, y1 = _fan_ends(x, y, s, n_sub, n_rays, length, trig, ends)
+        x0, y0, x1, y1 = _fan_box(x, y, s, n_sub, n_rays, length, trig)
         n = walls_in_box(x0, y0, x1, y1, walls, near, n_near, active)
         # the robots whose circle reaches the fan between the first and last rays (the
         # half-planes of their lines and the one ahead, grown by R and the cull margin)
@@ -496,8 +510,7 @@ def _sense_sub_arcs_among(
         nearest = np.inf
         who = -1
         for i in range(n_sub):
-            ex = ends[i, 0]
-            ey = ends[i, 1]
+            ex, ey = _ray_end(x, y, s, i, n_sub, n_rays, length, trig)
             alpha, k = first_hit(x, y, ex - x, ey - y, walls, active, n)
             j = -1  # first_robot_hit written out: an array passed per ray costs its refcounts
             nx = 0.0
@@ -539,7 +552,7 @@ def sense_among(x: float, y: float, h: float, geometry: tuple, goal: np.ndarray,
     are surfaces to the sonars and block the cameras' sight lines; also writes
     ``others``' ``ray_robot`` and ``sonar_robot``."""
     ray_offsets, ray_units, params, camera_dirs, markers, walls = geometry
-    raw, rays, eow_k, trig, ray_cos, decoy = buffers
+    raw, rays, eow_k, trig, ray_cos, decoy, wall_lists = buffers
     robots, present, me, ray_robot, sonar_robot = others
     length = params[0]
     radius = params[1]
@@ -547,7 +560,7 @@ def sense_among(x: float, y: float, h: float, geometry: tuple, goal: np.ndarray,
     half_arc = params[3]
     n_sonar = ray_offsets.shape[0]
     n_cam = camera_dirs.shape[0]
-    near = np.empty(walls.shape[0], np.int64)
+    near = wall_lists[0]
     n_near = near_walls(x, y, length, walls, near)
     near_r = np.empty(robots.shape[0], np.int64)
     n_r = robots_near(x, y, length + radius, robots, present, me, near_r)
@@ -557,8 +570,8 @@ def sense_among(x: float, y: float, h: float, geometry: tuple, goal: np.ndarray,
     else:
         directions = _ray_directions(h, ray_units, trig)
         _sense_sub_arcs_among(x, y, ray_offsets, params, walls, near, n_near, raw, rays,
-                              directions, ray_cos, robots, near_r, n_r, ray_robot,
-                              sonar_robot)  # fmt: skip
+                              directions, ray_cos, wall_lists[1], robots, near_r, n_r,
+                              ray_robot, sonar_robot)  # fmt: skip
     scene = (walls, robots, present, me, radius)
     goal2 = goal.reshape(1, 2)
     for c in range(n_cam):

@@ -40,8 +40,9 @@ import numpy as np
 
 from ..store.kernel_cache import ensure_fresh
 from .encoding_kernel import readout_inline
-from .ray_kernel import sense_among_inline, sense_one_inline
-from .realism_kernel import sense_realism, sense_realism_among
+from .ray_kernel import new_wall_lists, sense_among_inline, sense_one_inline
+from .realism import P_PINGS
+from .realism_kernel import new_work, sense_realism, sense_realism_among
 
 ensure_fresh()  # numba's cache, in step with every kernel's source (see there)
 
@@ -144,9 +145,12 @@ class ReadingArrays:
         n = len(suites)
         real = suites[0].realism
         g = k.geometry
-        self.shared = (g[0], g[1], g[3], g[4], g[5], k.encoding, real.neighbours)
+        self.shared = (g[0], g[1], g[3], g[4], g[5], k.encoding, real.neighbours,
+                       new_wall_lists(g[5]), new_work(k.ray_offsets.shape[0],
+                                                      int(real.params[P_PINGS])))  # fmt: skip
         """Shared by every robot: ray offsets and units, camera directions, markers, walls;
-        the read-out's group; the sonars' neighbours."""
+        the read-out's group; the sonars' neighbours; the readings' working space (the
+        lists of walls, the sonar models' values: the robots read one after another)."""
         n_plates = len(suites[0].plates)
         self.n_plates = np.zeros(n, np.int64)
         self.rows = (
@@ -226,12 +230,14 @@ class ReadingArrays:
 @numba.njit(cache=True, inline="always")
 def robot_group(r: int, shared: tuple, rows: tuple) -> tuple:
     """Robot ``r``'s :func:`reading_group` (:class:`ReadingArrays`)."""
-    ray_offsets, ray_units, camera_dirs, markers, walls, encoding, neighbours = shared
+    (ray_offsets, ray_units, camera_dirs, markers, walls, encoding, neighbours, wall_lists,
+     work) = shared  # fmt: skip
     (params, goal, plates, n_plates, raw, rays, eow_k, trig, ray_cos, decoy, rparams, rflags,
      echo, crossed, missed, misread, noise, out, codes, flags, u) = rows  # fmt: skip
     geometry = (ray_offsets, ray_units, params[r], camera_dirs, markers, walls)
-    buffers = (raw[r], rays[r], eow_k[r], trig[r], ray_cos[r], decoy[r])
-    realism = (rparams[r], rflags[r], neighbours, echo[r], crossed[r], missed[r], misread[r])
+    buffers = (raw[r], rays[r], eow_k[r], trig[r], ray_cos[r], decoy[r], wall_lists)
+    realism = (rparams[r], rflags[r], neighbours, echo[r], crossed[r], missed[r], misread[r],
+               work)  # fmt: skip
     return (geometry, goal[r], plates[r, : n_plates[r]], buffers, encoding, realism, noise[r],
             out[r], codes[r], flags[r], u[r])  # fmt: skip
 

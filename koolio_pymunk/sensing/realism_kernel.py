@@ -110,6 +110,12 @@ def _detect(d: float, p: np.ndarray) -> float:
     return near + (p[P_DETECT_FAR] - near) * min(d / p[P_VIEW], 1.0)
 
 
+def new_work(n_sonar: int, pings: int) -> np.ndarray:
+    """Room for the sonar models' working values (:func:`_sonar`: the readings before
+    crosstalk, a sonar's ``pings`` echoes): the reading allocates nothing."""
+    return np.zeros(n_sonar + max(1, pings))
+
+
 @numba.njit(cache=True, inline="always")
 def _sonar(
     raw: np.ndarray,
@@ -122,9 +128,12 @@ def _sonar(
     neighbours: np.ndarray,
     echo: np.ndarray,
     crossed: np.ndarray,
+    work: np.ndarray,
 ) -> None:
     """The sonar models; sonar ``s``'s draws are ``draws[base + 4 s : base + 4 s + 4]``.
-    The nearest echo goes straight into ``raw`` (only when a sonar model is on)."""
+    The nearest echo goes straight into ``raw`` (only when a sonar model is on).
+    ``work`` (:func:`new_work`) holds the readings before crosstalk and each sonar's
+    pings."""
     n, n_sub = rays.shape
     far = p[P_FAR]
     radius = p[P_RADIUS]
@@ -150,7 +159,9 @@ def _sonar(
         return
     if f[F_CROSSTALK]:
         chance = p[P_CROSSTALK]
-        before = raw[:n].copy()
+        before = work[:n]
+        for s in range(n):
+            before[s] = raw[s]
         for s in range(n):
             u = draws[base + 4 * s + 3]
             if u < chance:
@@ -161,8 +172,7 @@ def _sonar(
     beam, min_range = f[F_BEAM], p[P_MIN_RANGE]
     pings = int(p[P_PINGS])
     extra = base + int(p[P_PING_DRAWS])
-    if beam and pings > 1:  # one buffer per reading (one ping, the common case: none)
-        heard = np.empty(pings)
+    heard = work[n : n + pings]
     for s in range(n):
         v = raw[s]
         if beam:
@@ -257,7 +267,8 @@ def apply_realism(
     same draws.
     """
     n = rays.shape[0]
-    _sonar(raw, rays, ray_cos, draws, 0, params, flags, neighbours, echo, crossed)
+    work = np.zeros(n + max(1, int(params[P_PINGS])))  # new_work's room
+    _sonar(raw, rays, ray_cos, draws, 0, params, flags, neighbours, echo, crossed, work)
     _cameras(raw, n, decoy, draws, 0, params, flags, missed, misread)
 
 
@@ -277,8 +288,8 @@ def sense_realism(x: float, y: float, h: float, geometry: tuple, goal: np.ndarra
     ``noise`` as ``rng.uniform(-1, 1)`` turns them (``-1 + 2 u``), then the realism
     uniforms."""
     params, camera_dirs, walls = geometry[2], geometry[3], geometry[5]
-    raw, rays, eow_k, _, ray_cos, decoy = buffers
-    rparams, rflags, neighbours, echo, crossed, missed, misread = realism
+    raw, rays, eow_k, _, ray_cos, decoy, _ = buffers
+    rparams, rflags, neighbours, echo, crossed, missed, misread, work = realism
     n_sonar = encoding[1]
     m = raw.shape[0]
     base = 0  # where the realism uniforms start in u
@@ -295,7 +306,7 @@ def sense_realism(x: float, y: float, h: float, geometry: tuple, goal: np.ndarra
             direction = h + camera_dirs[c]
             decoy[c] = camera_reading_inline(x, y, direction, plates, params[3], params[1], far,
                                              walls)[0]  # fmt: skip
-    _sonar(raw, rays, ray_cos, u, base, rparams, rflags, neighbours, echo, crossed)
+    _sonar(raw, rays, ray_cos, u, base, rparams, rflags, neighbours, echo, crossed, work)
     _cameras(raw, n_sonar, decoy, u, base, rparams, rflags, missed, misread)
     return readout_inline(raw, noise, encoding, out, eow_k, codes)
 
@@ -340,8 +351,8 @@ def sense_realism_among(x: float, y: float, h: float, geometry: tuple, goal: np.
     plates too), the models, then each sonar's source (:func:`sonar_sources`) into
     ``others``' ``sonar_robot``."""
     params, camera_dirs, walls = geometry[2], geometry[3], geometry[5]
-    raw, rays, eow_k, _, ray_cos, decoy = buffers
-    rparams, rflags, neighbours, echo, crossed, missed, misread = realism
+    raw, rays, eow_k, _, ray_cos, decoy, _ = buffers
+    rparams, rflags, neighbours, echo, crossed, missed, misread, work = realism
     robots, present, me, ray_robot, sonar_robot = others
     n_sonar = encoding[1]
     m = raw.shape[0]
@@ -360,7 +371,7 @@ def sense_realism_among(x: float, y: float, h: float, geometry: tuple, goal: np.
             direction = h + camera_dirs[c]
             decoy[c] = camera_reading_among(x, y, direction, plates, params[3], params[1], far,
                                             scene)[0]  # fmt: skip
-    _sonar(raw, rays, ray_cos, u, base, rparams, rflags, neighbours, echo, crossed)
+    _sonar(raw, rays, ray_cos, u, base, rparams, rflags, neighbours, echo, crossed, work)
     sonar_sources(rays, echo, crossed, ray_robot, u, base, rparams, rflags, neighbours,
                   sonar_robot)  # fmt: skip
     _cameras(raw, n_sonar, decoy, u, base, rparams, rflags, missed, misread)

@@ -30,8 +30,9 @@ from __future__ import annotations
 #: directions (radians), end-of-world markers (n x 2), walls (``wall_array``).
 GEOMETRY = ("ray_offsets", "ray_units", "params", "camera_dirs", "markers", "walls")
 #: Noise-free readings, ray distances, marker seen per camera, trigonometry cache,
-#: incidence cosine per ray, other plate per camera.
-BUFFERS = ("raw", "rays", "eow_k", "trig", "ray_cos", "decoy")
+#: incidence cosine per ray, other plate per camera, room for the lists of walls near the
+#: robot and near a sonar's rays (``ray_kernel.new_wall_lists``: working space only).
+BUFFERS = ("raw", "rays", "eow_k", "trig", "ray_cos", "decoy", "wall_lists")
 #: Noise fraction per reading, sonar count, ``[really_long_distance, max_camera_view]``,
 #: sonar and camera thresholds, sonar group members and sizes, bits per state field,
 #: whether the compass is in the state.
@@ -40,8 +41,9 @@ ENCODING = (
     "group_sizes", "bits", "compass_in_state",
 )  # fmt: skip
 #: The realism models' parameters and flags, sonar neighbours, then what they report:
-#: echo per ray, crosstalk per sonar, missed detections and misreads per camera.
-REALISM = ("params", "flags", "neighbours", "echo", "crossed", "missed", "misread")
+#: echo per ray, crosstalk per sonar, missed detections and misreads per camera; room for
+#: the sonar models' working values (``realism_kernel.new_work``).
+REALISM = ("params", "flags", "neighbours", "echo", "crossed", "missed", "misread", "work")
 
 
 #: Every robot's centre (``(N, 2)`` float64, the reader's own row ignored), whether each

@@ -83,7 +83,7 @@ from ..store.errors import ConfigError
 from ..store.realism_config import RealismConfig
 from ..world.arena import Point
 from ..world.physics import World
-from .realism import SensorRealism, apply_reference, robot_sources
+from .realism import P_PINGS, SensorRealism, apply_reference, robot_sources
 from .sensor_arrays import BUFFERS, ENCODING, GEOMETRY, REALISM, bundle
 
 # The compiled kernels (ray_kernel.py, encoding_kernel.py) import numba, which takes a large part of
@@ -541,7 +541,7 @@ class KernelInputs:
         self.out = np.empty(self.n_raw)
         self.codes = np.empty(len(self.bits), np.int64)
         from .encoding_kernel import readout
-        from .ray_kernel import new_trig, sense_one
+        from .ray_kernel import new_trig, new_wall_lists, sense_one
         from .realism_kernel import sense_realism
 
         self._sense_one = sense_one
@@ -564,6 +564,9 @@ class KernelInputs:
             self._sense_among = sense_among
             self._sense_realism_kernel = sense_realism_among
         self.trig = new_trig(self.ray_offsets.size)
+        self.wall_lists = new_wall_lists(
+            self.walls if self.walls is not None else np.empty((0, 10))
+        )
         self.pose = (0.0, 0.0, 0.0)
         self.sonar_thresholds = s.sonar_thresholds
         self.camera_thresholds = s.camera_thresholds
@@ -586,6 +589,8 @@ class KernelInputs:
     def configure_realism(self) -> None:
         """Follow the suite's realism models: ray incidence on or off, the plates the
         cameras may misread (none when the misread model is off: nothing to compute)."""
+        from .realism_kernel import new_work
+
         s, real = self.suite, self.suite.realism
         self.real_on = real.on
         self.params[6] = 1.0 if real.incidence else 0.0
@@ -594,7 +599,8 @@ class KernelInputs:
         self.decoy[:] = s.far
         self.noise = np.zeros(self.n_raw)
         self.realism = bundle(REALISM, self, params=real.params, flags=real.flags,
-                              neighbours=real.neighbours)  # fmt: skip
+                              neighbours=real.neighbours,
+                              work=new_work(s.n_sonar, int(real.params[P_PINGS])))  # fmt: skip
         """The realism models' group (:data:`~.sensor_arrays.REALISM`)."""
 
     def key(self, codes: Sequence[int]) -> int:
@@ -622,7 +628,7 @@ class KernelInputs:
         else:
             ray_cos = self.ray_cos if ray_cos is None else ray_cos
             decoy = self.decoy if decoy is None else decoy
-            buffers = (raw, rays, eow_k, self.trig, ray_cos, decoy)
+            buffers = (raw, rays, eow_k, self.trig, ray_cos, decoy, self.wall_lists)
         if self.shared:
             others = self.others
             if ray_robot is not None or sonar_robot is not None:

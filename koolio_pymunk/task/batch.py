@@ -31,6 +31,7 @@ from ..sensing.memory_kernel import FIELDS, memory_group
 from ..sensing.reading_kernel import ReadingArrays
 from ..store.kernel_cache import ensure_fresh
 from ..world.segment_query import wall_array
+from ..world.swept_move import world_group
 from .env import KoolioEnv
 from .step_kernel import N_FLOATS, N_INTS, task_group
 
@@ -99,9 +100,10 @@ class EnvBatch:
         self.motion = np.zeros((n, 5))
         """Per robot: the drive's errors ``(on, drift, drift sigma, slip sigma, turn
         sigma)`` (radians)."""
-        self.world = (wall_array(first.world), float(first.world.radius),
-                      float(first.move_distance), float(first.turn_arc))  # fmt: skip
-        """``(walls, radius, move distance, turn arc)``, shared by the robots."""
+        self.world = world_group(wall_array(first.world), first.world.radius,
+                                 first.move_distance, first.turn_arc)  # fmt: skip
+        """``(walls, radius, move distance, turn arc, room)``, shared by the robots
+        (:func:`~koolio_pymunk.world.swept_move.world_group`)."""
         self.task = task_group(first.config, first.zones)
         """The rewards, end zones, rescue and step cap (:func:`~.step_kernel.task_group`)."""
         levels = len(first.sensors.levels)

@@ -38,13 +38,13 @@ import numpy as np
 
 from ..sensing.inline_twins import inline_twin
 from ..sensing.memory_kernel import remember, remember_inline
-from ..sensing.reading_kernel import robot_bump, sense_reading, sense_reading_among
+from ..sensing.reading_kernel import robot_bump, robot_group, sense_reading, sense_reading_among
 from ..store.config import Config, RewardConfig
 from ..store.kernel_cache import ensure_fresh
 from ..world.geometry import EPS
 from ..world.physics import TWO_PI, Action
 from ..world.segment_query import hypot
-from ..world.swept_move import act, act_among, sweep, sweep_among
+from ..world.swept_move import act, act_among, sweep_among, sweep_in
 from .end_zones import EndZones
 from .rules import ACTION_TERMS, TERMINAL_EVENTS, TERMS
 
@@ -166,18 +166,19 @@ def judge_code(
 
 @numba.njit(cache=True)
 def rescue_moves(
-    x: float, y: float, h: float, rng, walls: np.ndarray, distance: float, radius: float,
-    max_backup: int, others: tuple,
-) -> tuple[float, float, float]:  # fmt: skip
+    x: float, y: float, h: float, rng, world: tuple, max_backup: int, others: tuple
+) -> tuple[float, float, float]:
     """``rescue.rescue_robot``'s moves from ``(x, y, h)``: a random number of Reverse
-    moves (each a :func:`~koolio_pymunk.world.swept_move.sweep` against ``walls``, or in a
-    shared arena :func:`~koolio_pymunk.world.swept_move.sweep_among` the other robots of
-    ``others``), then a random heading; the draws from ``rng``. Returns the new pose."""
+    moves (each a :func:`~koolio_pymunk.world.swept_move.sweep` against the walls of
+    ``world``, or in a shared arena :func:`~koolio_pymunk.world.swept_move.sweep_among` the
+    other robots of ``others``), then a random heading; the draws from ``rng``. Returns
+    the new pose."""
+    walls, radius, distance = world[0], world[1], world[2]
     backups = rng.integers(0, max_backup + 1)
     for _ in range(backups):
         dx, dy = -distance * math.cos(h), -distance * math.sin(h)
         if others is None:
-            x, y = sweep(walls, x, y, dx, dy, radius)
+            x, y = sweep_in(walls, x, y, dx, dy, radius, world[4])
         else:
             x, y = sweep_among(walls, others[0], others[1], others[2], x, y, dx, dy, radius)
     return x, y, rng.uniform(0.0, TWO_PI) % TWO_PI
@@ -244,9 +245,8 @@ def rescue_check(
         return False
     if not rng.random() < chance:
         return False
-    walls, radius, distance = world[0], world[1], world[2]
-    x, y, h = rescue_moves(floats[r, F_X], floats[r, F_Y], floats[r, F_H], rng, walls,
-                           distance, radius, max_backup, others)  # fmt: skip
+    x, y, h = rescue_moves(floats[r, F_X], floats[r, F_Y], floats[r, F_H], rng, world,
+                           max_backup, others)  # fmt: skip
     floats[r, F_X], floats[r, F_Y], floats[r, F_H] = x, y, h
     if others is None:
         state = sense_reading(x, y, h, rng, sense)[0]
@@ -279,3 +279,20 @@ rescue_check_inline = inline_twin(
     rescue_moves=inline_twin(rescue_moves),
     remember=remember_inline,
 )
+
+
+@numba.njit(cache=True, _nrt=False)
+def simulate_robot(
+    r: int, action: int, rng, readings: tuple, world: tuple, motion: np.ndarray, task: tuple,
+    memory: tuple, ints: np.ndarray, floats: np.ndarray, mem: np.ndarray,
+) -> tuple:  # fmt: skip
+    """:func:`simulate` of robot ``r`` of a batch, alone in its arena, its reading group
+    made here from ``readings`` (``(shared, rows)`` of
+    :class:`~koolio_pymunk.sensing.reading_kernel.ReadingArrays`). Compiled without
+    reference counting (nothing here allocates, keeps or returns an array, and the
+    caller holds every array for the call): a step passes some fifty arrays through its
+    functions, and numba's atomic reference counts on them cost more than the step's
+    geometry."""
+    sense = robot_group(r, readings[0], readings[1])
+    return simulate_inline(r, action, rng, sense, world, motion, task, memory, ints, floats,
+                           mem, None)  # fmt: skip

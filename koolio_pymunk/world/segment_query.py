@@ -7,16 +7,19 @@ numba-compiled loops over a ``(n_walls, 10)`` array (endpoints, unit normal, bou
 box: :func:`wall_array`) read once from pymunk's own wall shapes, so that the answers
 are pymunk's, bit for bit:
 
-* :func:`first_hit` is Chipmunk's ``cpSegmentShapeSegmentQuery`` for a segment of
+* :func:`ray_wall` is Chipmunk's ``cpSegmentShapeSegmentQuery`` for a segment of
   radius 0, operation for operation (the same float64 expressions in the same order,
-  with pymunk's stored unit normal), keeping the smallest ``alpha < 1`` over the walls
-  as ``cpSpaceSegmentQueryFirst`` does;
+  with pymunk's stored unit normal), on scalars; :func:`first_hit` keeps the smallest
+  ``alpha < 1`` over the walls as ``cpSpaceSegmentQueryFirst`` does;
 * :func:`cast` and :func:`line_of_sight` are the rays of the sensors;
 * :func:`hypot` is a double-double ``sqrt(dx^2 + dy^2)`` that reproduces CPython's
   correctly rounded ``math.hypot``;
 
 Walls are culled by bounding box (:func:`walls_in_box`): a wall whose box the ray's box
-does not meet cannot be hit, so the result does not change. A ray that *starts* on a
+does not meet cannot be hit, so the result does not change. The queries the readings
+make on every step allocate nothing (their callers give the index lists), and the small
+ones are compiled into their callers (``inline="always"``): an array passed across a
+compiled call costs two atomic reference counts. A ray that *starts* on a
 wall (Chipmunk returns alpha 0) is left out of :func:`first_hit`: a robot's centre never
 is on a wall.
 
@@ -147,38 +150,49 @@ def hypot(dx: float, dy: float) -> float:
     return h + (r1 + (er + lo - eh)) / (2.0 * h)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
+def ray_wall(
+    x: float, y: float, dx: float, dy: float, ax: float, ay: float, bx: float, by: float,
+    nx: float, ny: float,
+) -> float:  # fmt: skip
+    """The hit fraction of the ray ``(x, y) + alpha * (dx, dy)`` on the wall from ``(ax,
+    ay)`` to ``(bx, by)`` with unit normal ``(nx, ny)``, when it crosses it (else
+    infinity): Chipmunk's radius-0 segment query of one wall. Scalars only, so that the
+    loops over walls (:func:`first_hit`, the sonars' rays) compile without reference
+    counts."""
+    d = (ax - x) * nx + (ay - y) * ny
+    sax = ax - x
+    say = ay - y
+    sbx = bx - x
+    sby = by - y
+    if (dx * say - dy * sax) * (dx * sby - dy * sbx) <= 0.0:
+        ad = -d
+        bd = (dx * nx + dy * ny) - d
+        if ad * bd < 0.0:
+            return ad / (ad - bd)
+    return math.inf
+
+
+@numba.njit(cache=True, inline="always")
 def first_hit(
     x: float, y: float, dx: float, dy: float, walls: np.ndarray, active: np.ndarray, n: int
 ) -> tuple[float, int]:
     """Smallest hit fraction ``alpha < 1`` of the ray ``(x, y) + alpha * (dx, dy)`` over
     walls ``active[:n]`` and the wall hit (1.0 and -1 when none is hit). Chipmunk's
-    radius-0 segment query."""
+    radius-0 segment query (:func:`ray_wall`)."""
     best = 1.0
     best_k = -1
     for j in range(n):
         k = active[j]
-        ax = walls[k, 0]
-        ay = walls[k, 1]
-        nx = walls[k, 4]
-        ny = walls[k, 5]
-        d = (ax - x) * nx + (ay - y) * ny
-        sax = ax - x
-        say = ay - y
-        sbx = walls[k, 2] - x
-        sby = walls[k, 3] - y
-        if (dx * say - dy * sax) * (dx * sby - dy * sbx) <= 0.0:
-            ad = -d
-            bd = (dx * nx + dy * ny) - d
-            if ad * bd < 0.0:
-                t = ad / (ad - bd)
-                if t < best:
-                    best = t
-                    best_k = k
+        t = ray_wall(x, y, dx, dy, walls[k, 0], walls[k, 1], walls[k, 2], walls[k, 3],
+                     walls[k, 4], walls[k, 5])  # fmt: skip
+        if t < best:
+            best = t
+            best_k = k
     return best, best_k
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def first_alpha(
     x: float, y: float, dx: float, dy: float, walls: np.ndarray, active: np.ndarray, n: int
 ) -> float:
@@ -186,7 +200,27 @@ def first_alpha(
     return first_hit(x, y, dx, dy, walls, active, n)[0]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
+def first_alpha_all(x: float, y: float, dx: float, dy: float, walls: np.ndarray) -> float:
+    """:func:`first_alpha` over every wall, in wall order (no index list to fill)."""
+    best = 1.0
+    for k in range(walls.shape[0]):
+        t = ray_wall(x, y, dx, dy, walls[k, 0], walls[k, 1], walls[k, 2], walls[k, 3],
+                     walls[k, 4], walls[k, 5])  # fmt: skip
+        if t < best:
+            best = t
+    return best
+
+
+@numba.njit(cache=True, inline="always")
+def _box_meets(walls: np.ndarray, k: int, x0: float, y0: float, x1: float, y1: float) -> bool:
+    """Wall ``k``'s bounding box, grown by the cull margin, meets ``[x0, x1] x [y0, y1]``."""
+    if walls[k, 6] - _CULL_MARGIN > x1 or walls[k, 8] + _CULL_MARGIN < x0:
+        return False
+    return not (walls[k, 7] - _CULL_MARGIN > y1 or walls[k, 9] + _CULL_MARGIN < y0)
+
+
+@numba.njit(cache=True, inline="always")
 def walls_in_box(
     x0: float,
     y0: float,
@@ -203,30 +237,22 @@ def walls_in_box(
     n = 0
     for j in range(n_candidates):
         k = candidates[j]
-        if walls[k, 6] - _CULL_MARGIN > x1 or walls[k, 8] + _CULL_MARGIN < x0:
-            continue
-        if walls[k, 7] - _CULL_MARGIN > y1 or walls[k, 9] + _CULL_MARGIN < y0:
-            continue
-        active[n] = candidates[j]
-        n += 1
+        if _box_meets(walls, k, x0, y0, x1, y1):
+            active[n] = k
+            n += 1
     return n
 
 
 @numba.njit(cache=True)
 def near_walls(x: float, y: float, reach: float, walls: np.ndarray, active: np.ndarray) -> int:
     """Fill ``active`` with the walls whose bounding box comes within ``reach`` of
-    ``(x, y)`` in both x and y; returns how many."""
-    everything = np.arange(walls.shape[0])
-    return walls_in_box(
-        x - reach, y - reach, x + reach, y + reach, walls, everything, walls.shape[0], active
-    )
-
-
-@numba.njit(cache=True)
-def all_walls(walls: np.ndarray, active: np.ndarray) -> int:
-    for j in range(walls.shape[0]):
-        active[j] = j
-    return walls.shape[0]
+    ``(x, y)`` in both x and y (:func:`walls_in_box` of every wall); returns how many."""
+    n = 0
+    for k in range(walls.shape[0]):
+        if _box_meets(walls, k, x - reach, y - reach, x + reach, y + reach):
+            active[n] = k
+            n += 1
+    return n
 
 
 @numba.njit(cache=True)
@@ -251,9 +277,7 @@ def line_of_sight(x: float, y: float, tx: float, ty: float, walls: np.ndarray) -
     dist = hypot(tx - x, ty - y)
     if dist < 1e-9:
         return True
-    active = np.empty(walls.shape[0], np.int64)
-    n = all_walls(walls, active)
-    alpha = first_alpha(x, y, tx - x, ty - y, walls, active, n)
+    alpha = first_alpha_all(x, y, tx - x, ty - y, walls)
     return alpha >= 1.0 or alpha * dist >= dist - 1e-7
 
 
@@ -578,9 +602,7 @@ def line_of_sight_among(
     dist = hypot(tx - x, ty - y)
     if dist < 1e-9:
         return True
-    active = np.empty(walls.shape[0], np.int64)
-    n = all_walls(walls, active)
-    alpha = first_alpha(x, y, tx - x, ty - y, walls, active, n)
+    alpha = first_alpha_all(x, y, tx - x, ty - y, walls)
     for j in range(robots.shape[0]):
         if j == me or not present[j]:
             continue

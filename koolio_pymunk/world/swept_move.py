@@ -122,7 +122,16 @@ def sweep(
     ``walls`` (:func:`~koolio_pymunk.world.segment_query.wall_array`): stopped by the
     first wall, sliding along it. :func:`koolio_pymunk.world.physics.sweep` with the
     walls' pymunk queries, bit for bit."""
-    active = np.empty(walls.shape[0], np.int64)
+    return sweep_in(walls, x, y, dx, dy, radius, np.empty(walls.shape[0], np.int64))
+
+
+@numba.njit(cache=True)
+def sweep_in(
+    walls: np.ndarray, x: float, y: float, dx: float, dy: float, radius: float,
+    active: np.ndarray,
+) -> tuple[float, float]:  # fmt: skip
+    """:func:`sweep` with ``active`` as room for the list of walls near the move
+    (``n_walls`` int64): the steps' moves allocate nothing (:func:`world_group`)."""
     n = _walls_near(x, y, abs(dx) + abs(dy) + radius, walls, active)
     pnx = 0.0
     pny = 0.0
@@ -234,17 +243,26 @@ def _drive(action: int, h: float, rng, distance: float, arc: float, motion) -> t
     return False, 0.0, 0.0, (h + turn) % TWO_PI
 
 
+def world_group(walls: np.ndarray, radius: float, distance: float, arc: float) -> tuple:
+    """:func:`act`'s ``world``: the walls (:func:`~.segment_query.wall_array`), the robot's
+    radius, the move distance and turn arc, and room for the list of walls near a move
+    (so that a move allocates nothing; robots moved one after another may share it)."""
+    return (walls, float(radius), float(distance), float(arc),
+            np.zeros(walls.shape[0], np.int64))  # fmt: skip
+
+
 @numba.njit(cache=True)
 def act(action: int, x: float, y: float, h: float, rng, world: tuple, motion) -> tuple:
     """The pose after ``action`` (0 Stop, 1 RotateLeft, 2 RotateRight, 3 Forward, 4
     Reverse): :meth:`World.act`, or with a real drive's errors (``motion[0]`` on; the
     draws from ``rng``) ``KoolioEnv._act_with_errors`` (:class:`MotionErrors`' turn and
     move, :meth:`World.drive`'s chord). ``world`` = ``(walls, radius, move distance, turn
-    arc)``; ``motion`` = ``(on, drift, drift sigma, slip sigma, turn sigma)``."""
+    arc, room for the walls near a move)`` (:func:`world_group`); ``motion`` = ``(on,
+    drift, drift sigma, slip sigma, turn sigma)``."""
     walls, radius, distance, arc = world[0], world[1], world[2], world[3]
     moves, dx, dy, h = _drive(action, h, rng, distance, arc, motion)
     if moves:
-        x, y = sweep(walls, x, y, dx, dy, radius)
+        x, y = sweep_in(walls, x, y, dx, dy, radius, world[4])
     return x, y, h
 
 

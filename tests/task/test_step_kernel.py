@@ -32,7 +32,7 @@ from koolio_pymunk.task.step_kernel import (
 from koolio_pymunk.world.arena import load_arena
 from koolio_pymunk.world.physics import Action
 from koolio_pymunk.world.segment_query import wall_array
-from koolio_pymunk.world.swept_move import act
+from koolio_pymunk.world.swept_move import act, world_group
 
 R = 10.0
 
@@ -82,7 +82,7 @@ def test_act_moves_as_the_pymunk_world_does(arena_name, errors) -> None:
     env = KoolioEnv(arena_name, world="koolio-real" if errors else None)
     env.reset(seed=3)
     walls = wall_array(env.world)
-    world = (walls, env.world.radius, float(env.move_distance), float(env.turn_arc))
+    world = world_group(walls, env.world.radius, env.move_distance, env.turn_arc)
     m = env.motion
     motion = np.zeros(5) if m is None else np.array(
         [1.0, m.drift, m.drift_sigma, m.slip_sigma, m.turn_sigma])  # fmt: skip

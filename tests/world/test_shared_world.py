@@ -19,7 +19,14 @@ from koolio_pymunk.world.arena import load_arena
 from koolio_pymunk.world.geometry import point_in_polygon, segments_intersect
 from koolio_pymunk.world.physics import COLLISION_SLOP, SKIN, Action, World
 from koolio_pymunk.world.segment_query import wall_array
-from koolio_pymunk.world.swept_move import act, act_among, move_among, sweep, sweep_among
+from koolio_pymunk.world.swept_move import (
+    act,
+    act_among,
+    move_among,
+    sweep,
+    sweep_among,
+    world_group,
+)
 
 R = 10.0
 #: Rounding allowance on positions of a few hundred inches.
@@ -167,7 +174,7 @@ def test_act_among_draws_as_act() -> None:
     other robots parked it ends where ``act`` does, with them in the way it stops."""
     w = shared(2, (50, 50), (80, 52))
     walls = wall_array(w)
-    world = (walls, R, 12.0, math.radians(15))
+    world = world_group(walls, R, 12.0, math.radians(15))
     motion = np.array([1.0, 0.01, 0.02, 0.05, 0.03])
     for action in range(5):
         a, b = np.random.default_rng(action), np.random.default_rng(action)
