@@ -29,13 +29,14 @@ from .step_kernel import (
     F_X,
     F_Y,
     I_BUMPS,
+    I_CHECK_RESCUE,
     I_HAS_BEEN_RESCUED,
     I_RESCUED,
     I_STATE,
     I_STEPS,
     WRONG_DOOR_CODE,
     rescue_check_inline,
-    simulate_inline,
+    simulate_robot,
 )
 
 ensure_fresh()  # numba's cache, in step with every kernel's source (see there)
@@ -66,15 +67,17 @@ def step_batch(
             continue
         a = actions[r]
         state = ints[r, I_STATE]
-        sense = robot_group(r, readings[0], readings[1])
         rng = gens[r]
-        _, code, reward, term, trunc = simulate_inline(r, a, rng, sense, world, motion, task,
-                                                       memory, ints, floats, mem, None)  # fmt: skip
-        n = sense[8].shape[0]
-        before[r, :n] = sense[8]  # the state the action led to: the reading, the memory
+        _, code, reward, term, trunc = simulate_robot(r, a, rng, readings, world, motion, task,
+                                                      memory, ints, floats, mem)  # fmt: skip
+        codes = robot_group(r, readings[0], readings[1])[8]
+        n = codes.shape[0]
+        before[r, :n] = codes  # the state the action led to: the reading, the memory
         for k in range(fields.shape[0]):
             before[r, n + k] = mem[r, fields[k]]
-        rescue_check_inline(r, rng, sense, world, task, memory, ints, floats, mem, None)
+        if ints[r, I_CHECK_RESCUE] == 1:  # rescue_check's first test (nothing else is due)
+            sense = robot_group(r, readings[0], readings[1])
+            rescue_check_inline(r, rng, sense, world, task, memory, ints, floats, mem, None)
         rewards[r] = reward
         terminated[r] = term
         truncated[r] = trunc or (cap > 0 and ints[r, I_STEPS] >= cap)
