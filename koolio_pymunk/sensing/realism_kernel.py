@@ -110,6 +110,7 @@ def _detect(d: float, p: np.ndarray) -> float:
     return near + (p[P_DETECT_FAR] - near) * min(d / p[P_VIEW], 1.0)
 
 
+@numba.njit(cache=True)
 def new_work(n_sonar: int, pings: int) -> np.ndarray:
     """Room for the sonar models' working values (:func:`_sonar`: the readings before
     crosstalk, a sonar's ``pings`` echoes): the reading allocates nothing."""
@@ -267,7 +268,7 @@ def apply_realism(
     same draws.
     """
     n = rays.shape[0]
-    work = np.zeros(n + max(1, int(params[P_PINGS])))  # new_work's room
+    work = new_work(n, int(params[P_PINGS]))
     _sonar(raw, rays, ray_cos, draws, 0, params, flags, neighbours, echo, crossed, work)
     _cameras(raw, n, decoy, draws, 0, params, flags, missed, misread)
 
