@@ -59,6 +59,7 @@ from ..task.step_kernel import (
     I_BUMPS,
     I_CHECK_RESCUE,
     I_HAS_BEEN_RESCUED,
+    I_STATE,
     I_STEPS,
     RUNNING,
     TRUNCATED_CODE,
@@ -83,11 +84,10 @@ from .table_kernel import (
     _barred,
     choose_inline,
     grow_journal,
-    lambda_update_inline,
+    learn_step,
     new_journal,
     not_greedy_inline,
     undo_writes,
-    update_inline,
 )
 
 ensure_fresh()  # numba's cache, in step with every kernel's source (see there)
@@ -128,61 +128,18 @@ def why_not(env: KoolioEnv, agent: object) -> str | None:
     return None
 
 
-@numba.njit(cache=True, inline="always")
-def _step(r: int, gens, agens, readings, world, motion, task, memory, ints, floats, mem,
-          among, learner, lints, epsilon, index, table, lam, traces, journal) -> int:  # fmt: skip
-    """Robot ``r``'s step (module doc); its outcome code, or :data:`RUNNING`. In a shared
-    arena (``among`` not None) the others are met; a robot whose episode ended leaves the
-    arena when :func:`run` returns it (:meth:`Engine.advance` calls ``KoolioEnv.leave``
-    before any other robot steps)."""
-    alpha, gamma, n_actions, no_undo, learn = learner
-    lambda_on = lam[0]
-    t_meta = traces[3][r]
-    own = lints[r, L_OWN]  # its own rows' offset (0: one table all share)
-    state = ints[r, 0] + own  # I_STATE
-    if lambda_on and state != t_meta[1]:  # not where the last step ended: no traces
-        t_meta[0] = 0
-    bar = _barred(lints[r, L_LAST]) if no_undo else -1
-    q = table[0]
-    action, explored = choose_inline(state, epsilon[r], agens[r], n_actions, index, q, bar)
-    if lambda_on and explored and not_greedy_inline(index, q, state, action, bar):
-        t_meta[0] = 0  # Watkins's cut
-    lints[r, L_LAST] = action
-    rng = gens[r]
-    if among is None:  # a robot alone (numba prunes the other branch)
-        nxt, code, reward, terminated, truncated = simulate_robot(
-            r, action, rng, readings, world, motion, task, memory, ints, floats, mem
-        )
-    else:
-        sense = robot_group(r, readings[0], readings[1])
-        nxt, code, reward, terminated, truncated = simulate_inline(
-            r, action, rng, sense, world, motion, task, memory, ints, floats, mem,
-            robot_others(r, among[0], among[1], among[2]),
-        )  # fmt: skip
-    nxt += own
-    if learn:
-        if lambda_on:
-            mine = (traces[0][r], traces[1][r], traces[2][r], t_meta)
-            lambda_update_inline(index, table, alpha, gamma, state, action, reward, nxt, terminated,
-                          lam, mine, r, journal)  # fmt: skip
-        else:
-            update_inline(index, table, alpha, gamma, state, action, reward, nxt, terminated, r,
-                   journal)  # fmt: skip
-    if ints[r, I_CHECK_RESCUE] == 0:  # rescue_check's own first test: no rescue due
-        rescued = False
-    elif among is None:
-        sense = robot_group(r, readings[0], readings[1])
-        rescued = rescue_check_inline(r, rng, sense, world, task, memory, ints, floats, mem, None)
-    else:
-        rescued = rescue_check_inline(r, rng, sense, world, task, memory, ints, floats, mem,
-                                      robot_others(r, among[0], among[1], among[2]))  # fmt: skip
-    if rescued:
-        lints[r, L_LAST] = -1  # QLearner.relocated
-    if terminated:
-        return code
-    if truncated:
-        return TRUNCATED_CODE
-    return RUNNING
+@numba.njit(cache=True)
+def _rescue(
+    r: int, rng, readings: tuple, world: tuple, task: tuple, memory: tuple, ints: np.ndarray,
+    floats: np.ndarray, mem: np.ndarray, among: tuple,
+) -> bool:  # fmt: skip
+    """Robot ``r``'s rescue check when one may be due (:func:`run`): ``rescue_check``
+    with its reading group (and in a shared arena its ``others``) made from the rows."""
+    sense = robot_group(r, readings[0], readings[1])
+    if among is None:
+        return rescue_check_inline(r, rng, sense, world, task, memory, ints, floats, mem, None)
+    return rescue_check_inline(r, rng, sense, world, task, memory, ints, floats, mem,
+                               robot_others(r, among[0], among[1], among[2]))  # fmt: skip
 
 
 @numba.njit(cache=True)
@@ -213,6 +170,8 @@ def run(
     n = ints.shape[0]
     room = journal[0].shape[1]
     jn = journal[2]
+    alpha, gamma, n_actions, no_undo, learn = learner
+    lambda_on = lam[0]
     any_active = False
     for r in range(n):
         any_active = any_active or lints[r, L_ACTIVE] == 1
@@ -231,9 +190,39 @@ def run(
             if room > 0 and jn[r] + writes > room:
                 ctl[C_CURSOR] = r
                 return NEED_ROOM
-            outcome = _step(r, gens, agens, readings, world, motion, task, memory, ints, floats,
-                            mem, among, learner, lints, epsilon, index, table, lam, traces,
-                            journal)  # fmt: skip
+            # Robot r's step (module doc), written here rather than in a function of its own:
+            # numba would bind every array of the groups to the function's arguments at
+            # each step, each binding an atomic reference count (docs/speed.md).
+            own = lints[r, L_OWN]  # its own rows' offset (0: one table all share)
+            state = ints[r, I_STATE] + own
+            if lambda_on and state != traces[3][r, 1]:  # not where the last step ended
+                traces[3][r, 0] = 0  # no traces
+            bar = _barred(lints[r, L_LAST]) if no_undo else -1
+            action, explored = choose_inline(state, epsilon[r], agens[r], n_actions, index,
+                                             table[0], bar)  # fmt: skip
+            if lambda_on and explored and not_greedy_inline(index, table[0], state, action, bar):
+                traces[3][r, 0] = 0  # Watkins's cut
+            lints[r, L_LAST] = action
+            rng = gens[r]
+            if among is None:  # a robot alone (numba prunes the other branch)
+                nxt, code, reward, terminated, truncated = simulate_robot(
+                    r, action, rng, readings, world, motion, task, memory, ints, floats, mem
+                )
+            else:
+                nxt, code, reward, terminated, truncated = simulate_inline(
+                    r, action, rng, robot_group(r, readings[0], readings[1]), world, motion,
+                    task, memory, ints, floats, mem, robot_others(r, among[0], among[1], among[2]),
+                )  # fmt: skip
+            nxt += own
+            if learn:
+                learn_step(r, index, table, alpha, gamma, state, action, reward, nxt, terminated,
+                           lam, traces, journal)  # fmt: skip
+            # rescue_check's own first test (no rescue due) made here: its group is made only
+            # when one is due
+            if ints[r, I_CHECK_RESCUE] != 0 and _rescue(r, rng, readings, world, task, memory,
+                                                        ints, floats, mem, among):  # fmt: skip
+                lints[r, L_LAST] = -1  # QLearner.relocated
+            outcome = code if terminated else (TRUNCATED_CODE if truncated else RUNNING)
             done += 1
             if outcome != RUNNING:
                 lints[r, L_ACTIVE] = 0

@@ -1,7 +1,8 @@
 """The learners' compiled pieces: one Q-table shared by the robots of the step engine.
 
 :class:`SharedTable` mirrors a :class:`~koolio_pymunk.store.qtable.QTable` in arrays a
-compiled loop can use: a typed dict from state key to row, a ``(capacity, n_actions)``
+compiled loop can use: an index from state key to row (a hash table in two arrays,
+:func:`_build_index`), a ``(capacity, n_actions)``
 array of values and, per row, the *era* of its last write (``stamp``: the value of
 ``count[1]`` when a kernel wrote it; Python starts a new era with :meth:`SharedTable.mark`).
 :meth:`SharedTable.sync` writes the rows written since its last call back into the
@@ -27,8 +28,6 @@ from __future__ import annotations
 
 import numba
 import numpy as np
-from numba import types
-from numba.typed import Dict
 
 from ..sensing.inline_twins import inline_twin
 from ..store.kernel_cache import ensure_fresh
@@ -43,7 +42,7 @@ _allowed_action = numba.njit(cache=True)(allowed_action)
 
 
 class SharedTable:
-    """A QTable's rows as a typed dict + arrays (see the module doc)."""
+    """A QTable's rows as arrays and an index in arrays (see the module doc)."""
 
     def __init__(self, table: QTable, reserve: int = 1024) -> None:
         self.table = table
@@ -61,7 +60,7 @@ class SharedTable:
         if n:
             self.keys[:n] = np.fromiter(table.rows, np.int64, n)
             self.q[:n] = np.array(list(table.rows.values()), dtype=np.float64)
-        self.index = _build_index(self.keys, n)  # compiled: no typed-dict calls from Python
+        self.index = _build_index(self.keys, n, cap)
 
     @property
     def capacity(self) -> int:
@@ -81,6 +80,7 @@ class SharedTable:
         dirty = np.zeros(new, np.int64)
         dirty[:n] = self.dirty[:n]
         self.q, self.keys, self.dirty = q, keys, dirty
+        self.index = _build_index(keys, n, new)
 
     def mark(self) -> int:
         """Start a new era of writes; returns the era that ends."""
@@ -111,27 +111,65 @@ class SharedTable:
         return int(find_row(self.index, key))
 
     def args(self) -> tuple:
-        """The kernels' table group ``(q, keys, dirty (the stamps), count, q_init)``; the typed dict
-        :attr:`index` goes beside it (a tuple holding a typed dict costs numba's slow
-        argument typing at every call)."""
+        """The kernels' table group ``(q, keys, dirty (the stamps), count, q_init)``; the
+        :attr:`index` (its arrays are replaced when :meth:`reserve` grows the table) goes
+        beside it."""
         return (self.q, self.keys, self.dirty, self.count, self.q_init)
 
 
-@numba.njit(cache=True)
-def _build_index(keys: np.ndarray, n: int):
-    """Typed dict ``keys[i] -> i`` for the first ``n`` keys."""
-    index = Dict.empty(key_type=types.int64, value_type=types.int64)
-    for i in range(n):
-        index[keys[i]] = i
+#: Fibonacci hashing's multiplier (2^64 / the golden ratio): a state key's slot in the index.
+_MULTIPLIER = np.uint64(0x9E3779B97F4A7C15)
+
+
+def _build_index(keys: np.ndarray, n: int, capacity: int) -> tuple[np.ndarray, np.ndarray]:
+    """The index of the first ``n`` of ``keys`` for a table of ``capacity`` rows: an open
+    addressing hash table in two arrays ``(slot keys, slot rows)`` of a power of two at
+    least twice ``capacity`` slots (-1: an empty slot), so at most half full. Arrays, not
+    numba's typed dict: the step's compiled code looks a key up without a call and without
+    reference counts."""
+    slots = 1 << max(4, int(2 * capacity - 1).bit_length())
+    index = (np.zeros(slots, np.int64), np.full(slots, -1, np.int64))
+    _fill_index(index, keys, n)
     return index
 
 
 @numba.njit(cache=True)
-def find_row(index, key: int) -> int:
+def _fill_index(index: tuple, keys: np.ndarray, n: int) -> None:
+    """Put rows ``0 .. n - 1`` (keys ``keys[:n]``) into the empty ``index``."""
+    for i in range(n):
+        _insert(index, keys[i], i)
+
+
+@numba.njit(cache=True, inline="always")
+def _slot(index: tuple, key: int) -> int:
+    """Where the search for ``key`` starts (linear probing from there)."""
+    mask = index[0].shape[0] - 1
+    return np.int64((np.uint64(key) * _MULTIPLIER) >> np.uint64(32)) & mask
+
+
+@numba.njit(cache=True, inline="always")
+def _insert(index: tuple, key: int, row: int) -> None:
+    """Put ``key -> row`` into ``index`` (``key`` is not in it; a slot is free)."""
+    slot_keys, slot_rows = index
+    mask = slot_keys.shape[0] - 1
+    i = _slot(index, key)
+    while slot_rows[i] >= 0:
+        i = (i + 1) & mask
+    slot_keys[i] = key
+    slot_rows[i] = row
+
+
+@numba.njit(cache=True, inline="always")
+def find_row(index: tuple, key: int) -> int:
     """The row of ``key``, -1 when missing."""
-    if key in index:
-        return index[key]
-    return -1
+    slot_keys, slot_rows = index
+    mask = slot_keys.shape[0] - 1
+    i = _slot(index, key)
+    while True:
+        row = slot_rows[i]
+        if row < 0 or slot_keys[i] == key:
+            return row
+        i = (i + 1) & mask
 
 
 @numba.njit(cache=True)
@@ -142,7 +180,7 @@ def row_of(index, table: tuple, key: int) -> int:
     i = find_row(index, key)
     if i < 0:
         i = count[0]
-        index[key] = i
+        _insert(index, key, i)
         keys[i] = key
         for a in range(q.shape[1]):
             q[i, a] = q_init
@@ -158,7 +196,19 @@ def td_target(index, table: tuple, gamma: float, reward: float, nxt: int, termin
     if terminal:
         return reward
     j = find_row(index, nxt)
-    return reward + gamma * (table[0][j].max() if j >= 0 else table[4])
+    return reward + gamma * (row_max(table[0], j) if j >= 0 else table[4])
+
+
+@numba.njit(cache=True, inline="always")
+def row_max(q: np.ndarray, i: int) -> float:
+    """``q[i].max()`` (a NaN wins, as numpy's does), without numba's ``max``, which needs
+    reference counting."""
+    best = q[i, 0]
+    for a in range(1, q.shape[1]):
+        v = q[i, a]
+        if v > best or v != v:
+            best = v
+    return best
 
 
 def new_journal(robots: int, capacity: int) -> tuple[np.ndarray, ...]:
@@ -308,9 +358,7 @@ def choose(state: int, epsilon: float, arng, n_actions: int, index, q: np.ndarra
     it was the exploratory choice."""
     if epsilon > 0.0 and arng.random() < epsilon:
         return _any_action(arng, n_actions, bar), True
-    i = -1
-    if state in index:
-        i = index[state]
+    i = find_row(index, state)
     if i < 0:
         return _any_action(arng, n_actions, bar), False
     best = best_value(q, i, n_actions, bar)
@@ -330,16 +378,16 @@ def choose(state: int, epsilon: float, arng, n_actions: int, index, q: np.ndarra
 def not_greedy(index, q: np.ndarray, state: int, action: int, bar: int = -1) -> bool:
     """``QLambda.explore``'s cut: ``action`` is below the best of ``state``'s row over the
     actions allowed (all but ``bar``; a state never visited has no row: no cut)."""
-    if state not in index:
+    i = find_row(index, state)
+    if i < 0:
         return False
-    i = index[state]
     return q[i, action] < best_value(q, i, q.shape[1], bar)
 
 
 #: The learners' kernels with every call that passes arrays compiled into them
 #: (:func:`~koolio_pymunk.sensing.inline_twins.inline_twin`), for the step engine's loop.
-_row_of_inline = inline_twin(row_of, find_row=inline_twin(find_row))
-_td_target_inline = inline_twin(td_target, find_row=inline_twin(find_row))
+_row_of_inline = inline_twin(row_of)
+_td_target_inline = inline_twin(td_target)
 _journal_inline = inline_twin(_journal)
 update_inline = inline_twin(
     update, row_of=_row_of_inline, td_target=_td_target_inline, _journal=_journal_inline
@@ -351,3 +399,22 @@ _best_value_inline = inline_twin(best_value)
 choose_inline = inline_twin(choose, _any_action=inline_twin(_any_action),
                             best_value=_best_value_inline)  # fmt: skip
 not_greedy_inline = inline_twin(not_greedy, best_value=_best_value_inline)
+
+
+@numba.njit(cache=True, _nrt=False)
+def learn_step(
+    r: int, index: tuple, table: tuple, alpha: float, gamma: float, state: int, action: int,
+    reward: float, nxt: int, terminal: bool, lam: tuple, traces: tuple, journal: tuple,
+) -> None:  # fmt: skip
+    """Robot ``r``'s update of one step: :func:`lambda_update` with its rows of ``traces``
+    when Q(lambda) is on (``lam[0]``), else :func:`update`. Compiled without reference
+    counting, as the step engine's move and reading are
+    (:func:`~koolio_pymunk.task.step_kernel.simulate_robot`): nothing in it allocates,
+    keeps or returns an array."""
+    if lam[0]:
+        mine = (traces[0][r], traces[1][r], traces[2][r], traces[3][r])
+        lambda_update_inline(index, table, alpha, gamma, state, action, reward, nxt, terminal,
+                             lam, mine, r, journal)  # fmt: skip
+    else:
+        update_inline(index, table, alpha, gamma, state, action, reward, nxt, terminal, r,
+                      journal)  # fmt: skip
