@@ -16,7 +16,8 @@ in the same order, the same draws from the same generators):
   the no-undo rule (``learner.no_undo``, :mod:`~koolio_pymunk.task.action_rules`);
 * :func:`update`: Table 11 (``qlearning.td_target``/``td_step``, ``QLearner.update``);
 * :func:`lambda_update`: Watkins's Q(lambda)'s traced update (``QLambda.observe``), with
-  :func:`not_greedy`, its cut;
+  :func:`not_greedy`, its cut; :func:`learn_step`, the step engine's call of one or the
+  other, compiled without reference counts;
 * the *journal* (:func:`new_journal`): every write of a robot's running episode (row,
   action, order, value before and after), so that the writes of episodes still running
   can be taken back (``--discard-unfinished`` with many robots: :func:`undo_writes`).
