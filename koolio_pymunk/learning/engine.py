@@ -64,7 +64,7 @@ from ..task.step_kernel import (
     RUNNING,
     TRUNCATED_CODE,
     WRONG_DOOR_CODE,
-    rescue_check_inline,
+    rescue_check_robot,
     simulate_inline,
     simulate_robot,
 )
@@ -126,20 +126,6 @@ def why_not(env: KoolioEnv, agent: object) -> str | None:
     if not env.sensors.fused:
         return f"sensors.backend {env.sensors.backend}: the pymunk reference runs in Python"
     return None
-
-
-@numba.njit(cache=True)
-def _rescue(
-    r: int, rng, readings: tuple, world: tuple, task: tuple, memory: tuple, ints: np.ndarray,
-    floats: np.ndarray, mem: np.ndarray, among: tuple,
-) -> bool:  # fmt: skip
-    """Robot ``r``'s rescue check when one may be due (:func:`run`): ``rescue_check``
-    with its reading group (and in a shared arena its ``others``) made from the rows."""
-    sense = robot_group(r, readings[0], readings[1])
-    if among is None:
-        return rescue_check_inline(r, rng, sense, world, task, memory, ints, floats, mem, None)
-    return rescue_check_inline(r, rng, sense, world, task, memory, ints, floats, mem,
-                               robot_others(r, among[0], among[1], among[2]))  # fmt: skip
 
 
 @numba.njit(cache=True)
@@ -219,8 +205,9 @@ def run(
                            lam, traces, journal)  # fmt: skip
             # rescue_check's own first test (no rescue due) made here: its group is made only
             # when one is due
-            if ints[r, I_CHECK_RESCUE] != 0 and _rescue(r, rng, readings, world, task, memory,
-                                                        ints, floats, mem, among):  # fmt: skip
+            if ints[r, I_CHECK_RESCUE] != 0 and rescue_check_robot(
+                r, rng, readings, world, task, memory, ints, floats, mem, among
+            ):
                 lints[r, L_LAST] = -1  # QLearner.relocated
             outcome = code if terminated else (TRUNCATED_CODE if truncated else RUNNING)
             done += 1

@@ -41,7 +41,6 @@ import numpy as np
 from ..store.kernel_cache import ensure_fresh
 from .encoding_kernel import readout_inline
 from .ray_kernel import new_wall_lists, sense_among_inline, sense_one_inline
-from .realism import P_PINGS
 from .realism_kernel import new_work, sense_realism, sense_realism_among
 
 ensure_fresh()  # numba's cache, in step with every kernel's source (see there)
@@ -145,9 +144,9 @@ class ReadingArrays:
         n = len(suites)
         real = suites[0].realism
         g = k.geometry
+        work = new_work(k.ray_offsets.shape[0], real.params)
         self.shared = (g[0], g[1], g[3], g[4], g[5], k.encoding, real.neighbours,
-                       new_wall_lists(g[5]), new_work(k.ray_offsets.shape[0],
-                                                      int(real.params[P_PINGS])))  # fmt: skip
+                       new_wall_lists(g[5]), work)  # fmt: skip
         """Shared by every robot: ray offsets and units, camera directions, markers, walls;
         the read-out's group; the sonars' neighbours; the readings' working space (the
         lists of walls, the sonar models' values: the robots read one after another)."""

@@ -111,10 +111,11 @@ def _detect(d: float, p: np.ndarray) -> float:
 
 
 @numba.njit(cache=True)
-def new_work(n_sonar: int, pings: int) -> np.ndarray:
+def new_work(n_sonar: int, params: np.ndarray) -> np.ndarray:
     """Room for the sonar models' working values (:func:`_sonar`: the readings before
-    crosstalk, a sonar's ``pings`` echoes): the reading allocates nothing."""
-    return np.zeros(n_sonar + max(1, pings))
+    crosstalk, a sonar's pings' echoes) for the models' ``params``: the reading allocates
+    nothing."""
+    return np.zeros(n_sonar + max(1, int(params[P_PINGS])))
 
 
 @numba.njit(cache=True, inline="always")
@@ -268,7 +269,7 @@ def apply_realism(
     same draws.
     """
     n = rays.shape[0]
-    work = new_work(n, int(params[P_PINGS]))
+    work = new_work(n, params)
     _sonar(raw, rays, ray_cos, draws, 0, params, flags, neighbours, echo, crossed, work)
     _cameras(raw, n, decoy, draws, 0, params, flags, missed, misread)
 

@@ -83,7 +83,7 @@ from ..store.errors import ConfigError
 from ..store.realism_config import RealismConfig
 from ..world.arena import Point
 from ..world.physics import World
-from .realism import P_PINGS, SensorRealism, apply_reference, robot_sources
+from .realism import SensorRealism, apply_reference, robot_sources
 from .sensor_arrays import BUFFERS, ENCODING, GEOMETRY, REALISM, bundle
 
 # The compiled kernels (ray_kernel.py, encoding_kernel.py) import numba, which takes a large part of
@@ -600,7 +600,7 @@ class KernelInputs:
         self.noise = np.zeros(self.n_raw)
         self.realism = bundle(REALISM, self, params=real.params, flags=real.flags,
                               neighbours=real.neighbours,
-                              work=new_work(s.n_sonar, int(real.params[P_PINGS])))  # fmt: skip
+                              work=new_work(s.n_sonar, real.params))  # fmt: skip
         """The realism models' group (:data:`~.sensor_arrays.REALISM`)."""
 
     def key(self, codes: Sequence[int]) -> int:

@@ -38,7 +38,13 @@ import numpy as np
 
 from ..sensing.inline_twins import inline_twin
 from ..sensing.memory_kernel import remember, remember_inline
-from ..sensing.reading_kernel import robot_bump, robot_group, sense_reading, sense_reading_among
+from ..sensing.reading_kernel import (
+    robot_bump,
+    robot_group,
+    robot_others,
+    sense_reading,
+    sense_reading_among,
+)
 from ..store.config import Config, RewardConfig
 from ..store.kernel_cache import ensure_fresh
 from ..world.geometry import EPS
@@ -296,3 +302,20 @@ def simulate_robot(
     sense = robot_group(r, readings[0], readings[1])
     return simulate_inline(r, action, rng, sense, world, motion, task, memory, ints, floats,
                            mem, None)  # fmt: skip
+
+
+@numba.njit(cache=True)
+def rescue_check_robot(
+    r: int, rng, readings: tuple, world: tuple, task: tuple, memory: tuple, ints: np.ndarray,
+    floats: np.ndarray, mem: np.ndarray, among: tuple,
+) -> bool:  # fmt: skip
+    """:func:`rescue_check` of robot ``r`` of a batch, its reading group (and in a shared
+    arena, ``among`` not None, its ``others``) made here from ``readings``, as
+    :func:`simulate_robot` makes it. Its callers call it only when ``ints[r,
+    I_CHECK_RESCUE]`` says a rescue may be due (:func:`rescue_check`'s own first test):
+    the groups are made, and the call paid, on those steps only."""
+    sense = robot_group(r, readings[0], readings[1])
+    if among is None:
+        return rescue_check_inline(r, rng, sense, world, task, memory, ints, floats, mem, None)
+    return rescue_check_inline(r, rng, sense, world, task, memory, ints, floats, mem,
+                               robot_others(r, among[0], among[1], among[2]))  # fmt: skip

@@ -35,7 +35,7 @@ from .step_kernel import (
     I_STATE,
     I_STEPS,
     WRONG_DOOR_CODE,
-    rescue_check_inline,
+    rescue_check_robot,
     simulate_robot,
 )
 
@@ -76,8 +76,7 @@ def step_batch(
         for k in range(fields.shape[0]):
             before[r, n + k] = mem[r, fields[k]]
         if ints[r, I_CHECK_RESCUE] == 1:  # rescue_check's first test (nothing else is due)
-            sense = robot_group(r, readings[0], readings[1])
-            rescue_check_inline(r, rng, sense, world, task, memory, ints, floats, mem, None)
+            rescue_check_robot(r, rng, readings, world, task, memory, ints, floats, mem, None)
         rewards[r] = reward
         terminated[r] = term
         truncated[r] = trunc or (cap > 0 and ints[r, I_STEPS] >= cap)
