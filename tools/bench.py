@@ -360,7 +360,7 @@ def many_where(robots: int, episodes: int, folder: Path, config: str | None = No
         (engine, "run", "compiled steps (engine.run)"),
         (engine.Engine, "begin", "episode start (Engine.begin)"),
         (engine, "env_seed", "  env seed (SeedSequence)"),
-        (batch, "generator_state", "  2 generator states (SeedSequence, PCG64)"),
+        (batch, "pcg64_state", "  2 generator states (SeedSequence, PCG64)"),
         (KoolioEnv, "reset_key", "  env reset (KoolioEnv.reset_key)"),
         (batch.EnvBatch, "load", "  load into the arrays (EnvBatch.load)"),
         (engine.Engine, "result", "episode row (Engine.result)"),

@@ -53,6 +53,7 @@ import numpy as np
 
 from ..store.keyword import robot_offset, table_robots
 from ..task.env import KoolioEnv
+from ..task.seeding import seed_of
 
 #: Seed streams: training, evaluation and robot episodes of one seed never share starts.
 TRAIN_STREAM, EVAL_STREAM, ROBOT_STREAM = 0, 1, 2
@@ -74,8 +75,10 @@ def episode_seeds(
 
 
 def env_seed(seed: int, episode: int, stream: int = TRAIN_STREAM) -> int:
-    """The environment seed of :func:`episode_seeds` alone (no agent generator made)."""
-    return int(np.random.SeedSequence([seed, episode, stream]).generate_state(1)[0])
+    """The environment seed of :func:`episode_seeds` alone (no agent generator made):
+    ``SeedSequence([seed, episode, stream]).generate_state(1)[0]``
+    (:func:`~koolio_pymunk.task.seeding.seed_of`)."""
+    return seed_of([seed, episode, stream])
 
 
 @dataclass

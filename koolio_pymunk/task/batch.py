@@ -15,7 +15,8 @@ steps would have left.
 
 **Generators.** Each robot's env draws from one generator object for the batch's whole
 life (``env.np_random``); a reset with a seed (:meth:`EnvBatch.reseed`) gives it the state
-``reset(seed=...)`` would give a new one (Gymnasium's ``PCG64(SeedSequence(seed))``), so
+``reset(seed=...)`` would give a new one (Gymnasium's ``PCG64(SeedSequence(seed))``,
+computed in one compiled call: :func:`~.seeding.pcg64_state`), so
 the draws are the same and the compiled code, which holds the object, never has to take a
 new one (taking a generator into compiled code costs more than a whole step).
 """
@@ -33,6 +34,7 @@ from ..store.kernel_cache import ensure_fresh
 from ..world.segment_query import wall_array
 from ..world.swept_move import world_group
 from .env import KoolioEnv
+from .seeding import pcg64_state
 from .step_kernel import N_FLOATS, N_INTS, task_group
 
 ensure_fresh()  # numba's cache, in step with every kernel's source (see there)
@@ -54,15 +56,9 @@ def set_item(items, i: int, item) -> None:
     items[i] = item
 
 
-def generator_state(seed: int) -> dict:
-    """The bit generator's state of ``np.random.default_rng(seed)`` (and of the generator
-    Gymnasium's ``reset(seed=seed)`` makes); ``seed`` may be a list of integers."""
-    return np.random.PCG64(np.random.SeedSequence(seed)).state
-
-
 class Generators:
     """One generator object per robot, their states set for each episode
-    (:func:`generator_state`), and the numba list of the same objects."""
+    (:func:`~.seeding.pcg64_state`), and the numba list of the same objects."""
 
     def __init__(self, n: int) -> None:
         self.items = [np.random.Generator(np.random.PCG64(i)) for i in range(n)]
@@ -73,7 +69,7 @@ class Generators:
     def seeded(self, r: int, seed) -> np.random.Generator:
         """Robot ``r``'s generator, its state that of ``default_rng(seed)``."""
         g = self.items[r]
-        g.bit_generator.state = generator_state(seed)
+        g.bit_generator.state = pcg64_state(seed)
         return g
 
 
