@@ -103,33 +103,88 @@ def new_wall_lists(walls: np.ndarray) -> np.ndarray:
 # -- kernels -------------------------------------------------------------------------------
 
 
+@numba.njit(cache=True, inline="always")
+def _wrap(a: float) -> float:
+    """``a % TWO_PI`` (Python's float modulo) without ``fmod`` for ``-TWO_PI < a < 2 *
+    TWO_PI``, where it is exact: ``a`` itself, ``a + TWO_PI`` (one rounding, as Python's
+    ``%`` adds it) or ``a - TWO_PI`` (exact by Sterbenz's lemma, as ``fmod`` is)."""
+    if 0.0 < a < TWO_PI:
+        return a
+    if TWO_PI <= a < 2.0 * TWO_PI:
+        return a - TWO_PI
+    if -TWO_PI < a < 0.0:
+        return a + TWO_PI
+    return a % TWO_PI
+
+
 @numba.njit(cache=True)
-def camera_reading(
+def camera_readings(
     x: float,
     y: float,
-    direction: float,
+    h: float,
+    camera_dirs: np.ndarray,
     targets: np.ndarray,
     half_arc: float,
     radius: float,
     far: float,
     walls: np.ndarray,
-) -> tuple[float, int]:
-    """Edge distance to the nearest target inside the arc and in sight (far, -1: none)."""
-    best = far
-    best_k = -1
+    dist: np.ndarray,
+    which: np.ndarray,
+) -> None:
+    """Each camera ``c`` (direction ``h + camera_dirs[c]``): ``dist[c]`` the edge distance
+    to the nearest of ``targets`` inside its arc and in sight (``far``: none), and, when
+    ``which`` is not empty, ``which[c]`` that target's index (-1: none).
+
+    Targets are taken in order and a camera keeps the first at the least distance. A
+    target's bearing, distance and line of sight are the same for every camera: each is
+    computed once per reading (the sight line only when a camera needs it), not once per
+    camera."""
+    n_cam = camera_dirs.shape[0]
+    for c in range(n_cam):
+        dist[c] = far
+        if which.shape[0] > 0:
+            which[c] = -1
     for k in range(targets.shape[0]):
         tx = targets[k, 0]
         ty = targets[k, 1]
         dx = tx - x
         dy = ty - y
-        rel = (math.atan2(dy, dx) - direction + math.pi) % TWO_PI - math.pi
-        if abs(rel) > half_arc:
-            continue
-        d = max(0.0, hypot(dx, dy) - radius)
-        if d < best and line_of_sight(x, y, tx, ty, walls):
-            best = d
-            best_k = k
-    return best, best_k
+        bearing = math.atan2(dy, dx)
+        d = -1.0  # not computed yet
+        sight = -1  # not asked yet
+        for c in range(n_cam):
+            direction = h + camera_dirs[c]
+            rel = _wrap(bearing - direction + math.pi) - math.pi
+            if abs(rel) > half_arc:
+                continue
+            if d < 0.0:
+                d = max(0.0, hypot(dx, dy) - radius)
+            if d < dist[c]:
+                if sight < 0:
+                    sight = 1 if line_of_sight(x, y, tx, ty, walls) else 0
+                if sight == 1:
+                    dist[c] = d
+                    if which.shape[0] > 0:
+                        which[c] = k
+
+
+@numba.njit(cache=True)
+def _camera_reads(x: float, y: float, h: float, cameras: tuple, goal: np.ndarray,
+                  markers: np.ndarray, plates: np.ndarray, walls: np.ndarray, raw: np.ndarray,
+                  n_sonar: int, eow_k: np.ndarray, decoy: np.ndarray) -> None:  # fmt: skip
+    """Every camera's reading (:func:`camera_readings`, ``cameras`` = ``(camera_dirs,
+    half_arc, radius, far)``): of the goal plate into ``raw[n_sonar:]``, of the
+    end-of-world markers after it (the marker each sees into ``eow_k``), and with
+    ``plates`` (the other doors' plates) into ``decoy``."""
+    camera_dirs, half_arc, radius, far = cameras
+    n_cam = camera_dirs.shape[0]
+    none = eow_k[:0]
+    camera_readings(x, y, h, camera_dirs, goal.reshape(1, 2), half_arc, radius, far, walls,
+                    raw[n_sonar : n_sonar + n_cam], none)  # fmt: skip
+    camera_readings(x, y, h, camera_dirs, markers, half_arc, radius, far, walls,
+                    raw[n_sonar + n_cam : n_sonar + 2 * n_cam], eow_k)  # fmt: skip
+    if plates.shape[0] > 0:
+        camera_readings(x, y, h, camera_dirs, plates, half_arc, radius, far, walls, decoy, none)
 
 
 @numba.njit(cache=True)
@@ -217,15 +272,8 @@ def sense_one(x: float, y: float, h: float, geometry: tuple, goal: np.ndarray, p
         directions = _ray_directions(h, ray_units, trig)
         _sense_sub_arcs(x, y, ray_offsets, params, walls, near, n_near, raw, rays, directions,
                         ray_cos, wall_lists[1])  # fmt: skip
-    goal2 = goal.reshape(1, 2)
-    for c in range(n_cam):
-        direction = h + camera_dirs[c]
-        raw[n_sonar + c] = camera_reading(x, y, direction, goal2, half_arc, radius, far, walls)[0]
-        d, k = camera_reading(x, y, direction, markers, half_arc, radius, far, walls)
-        raw[n_sonar + n_cam + c] = d
-        eow_k[c] = k
-        if plates.shape[0] > 0:
-            decoy[c] = camera_reading(x, y, direction, plates, half_arc, radius, far, walls)[0]
+    cameras = (camera_dirs, half_arc, radius, far)
+    _camera_reads(x, y, h, cameras, goal, markers, plates, walls, raw, n_sonar, eow_k, decoy)
     raw[n_sonar + 2 * n_cam] = (h / TWO_PI) * 256.0
 
 
@@ -346,12 +394,14 @@ def _sense_sub_arcs(
         raw[s] = far if nearest > length - 1e-9 else nearest - radius
 
 
-#: :func:`camera_reading` and :func:`sense_one` with every call that passes arrays compiled
+#: :func:`camera_readings` and :func:`sense_one` with every call that passes arrays compiled
 #: into them (:func:`~.inline_twins.inline_twin`): for compiled callers on a hot path (this
 #: module's :func:`sense_batch`, the step engine's reading, the realism kernel).
-camera_reading_inline = inline_twin(camera_reading, line_of_sight=inline_twin(line_of_sight))
+camera_readings_inline = inline_twin(camera_readings, line_of_sight=inline_twin(line_of_sight))
 sense_one_inline = inline_twin(
-    sense_one, near_walls=inline_twin(near_walls), camera_reading=camera_reading_inline
+    sense_one,
+    near_walls=inline_twin(near_walls),
+    _camera_reads=inline_twin(_camera_reads, camera_readings=camera_readings_inline),
 )
 
 
@@ -421,16 +471,17 @@ def cone_circle(
 def _los_scene(x: float, y: float, tx: float, ty: float, scene: tuple) -> bool:
     """:func:`~koolio_pymunk.world.segment_query.line_of_sight_among` with its walls and
     robots as one ``scene`` = ``(walls, robots, present, me, radius)``: what
-    :func:`camera_reading_among` passes where :func:`camera_reading` passes the walls."""
+    :func:`camera_readings_among` passes where :func:`camera_readings` passes the walls."""
     walls, robots, present, me, radius = scene
     return _line_of_sight_among(x, y, tx, ty, walls, robots, present, me, radius)
 
 
 _line_of_sight_among = inline_twin(line_of_sight_among)
-#: :func:`camera_reading` in a shared world: the same code, compiled inline, its
+#: :func:`camera_readings` in a shared world: the same code, compiled inline, its
 #: ``walls`` argument the scene of :func:`_los_scene` (walls and other robots), so that a
 #: robot blocks a sight line as a wall does.
-camera_reading_among = inline_twin(camera_reading, line_of_sight=_los_scene)
+camera_readings_among = inline_twin(camera_readings, line_of_sight=_los_scene)
+_camera_reads_among = inline_twin(_camera_reads, camera_readings=camera_readings_among)
 
 
 @numba.njit(cache=True, inline="always")
@@ -573,17 +624,9 @@ def sense_among(x: float, y: float, h: float, geometry: tuple, goal: np.ndarray,
                               directions, ray_cos, wall_lists[1], robots, near_r, n_r,
                               ray_robot, sonar_robot)  # fmt: skip
     scene = (walls, robots, present, me, radius)
-    goal2 = goal.reshape(1, 2)
-    for c in range(n_cam):
-        direction = h + camera_dirs[c]
-        raw[n_sonar + c] = camera_reading_among(x, y, direction, goal2, half_arc, radius, far,
-                                                scene)[0]  # fmt: skip
-        d, k = camera_reading_among(x, y, direction, markers, half_arc, radius, far, scene)
-        raw[n_sonar + n_cam + c] = d
-        eow_k[c] = k
-        if plates.shape[0] > 0:
-            decoy[c] = camera_reading_among(x, y, direction, plates, half_arc, radius, far,
-                                            scene)[0]  # fmt: skip
+    cameras = (camera_dirs, half_arc, radius, far)
+    _camera_reads_among(x, y, h, cameras, goal, markers, plates, scene, raw, n_sonar, eow_k,
+                        decoy)  # fmt: skip
     raw[n_sonar + 2 * n_cam] = (h / TWO_PI) * 256.0
 
 

@@ -23,7 +23,7 @@ decrements each array's reference count, an atomic operation: with the models in
 functions of their own, a third of a realistic reading's perf samples were in
 ``NRT_incref``/``NRT_decref`` (``docs/speed.md``). So the models' helpers are compiled inline
 into their caller (``inline="always"``), and :func:`sense_realism` calls the inline twins
-of :func:`~.ray_kernel.sense_one`, :func:`~.ray_kernel.camera_reading` and
+of :func:`~.ray_kernel.sense_one`, :func:`~.ray_kernel.camera_readings` and
 :func:`~.encoding_kernel.readout` (the same Python functions compiled a second time, with
 the functions they call that take arrays: :mod:`~.inline_twins`); the draws are read at an
 offset (``base``) instead of through a view. The arithmetic is the same operations in the
@@ -40,8 +40,8 @@ import numpy as np
 from ..store.kernel_cache import ensure_fresh
 from .encoding_kernel import readout_inline
 from .ray_kernel import (
-    camera_reading_among,
-    camera_reading_inline,
+    camera_readings_among,
+    camera_readings_inline,
     sense_among_inline,
     sense_one_inline,
 )
@@ -305,9 +305,8 @@ def sense_realism(x: float, y: float, h: float, geometry: tuple, goal: np.ndarra
     for c in range(camera_dirs.shape[0]):
         decoy[c] = far
         if misread_on and u[base + 4 * n_sonar + 3 * c] < misread_chance:
-            direction = h + camera_dirs[c]
-            decoy[c] = camera_reading_inline(x, y, direction, plates, params[3], params[1], far,
-                                             walls)[0]  # fmt: skip
+            camera_readings_inline(x, y, h, camera_dirs[c : c + 1], plates, params[3],
+                                   params[1], far, walls, decoy[c : c + 1], eow_k[:0])  # fmt: skip
     _sonar(raw, rays, ray_cos, u, base, rparams, rflags, neighbours, echo, crossed, work)
     _cameras(raw, n_sonar, decoy, u, base, rparams, rflags, missed, misread)
     return readout_inline(raw, noise, encoding, out, eow_k, codes)
@@ -370,9 +369,8 @@ def sense_realism_among(x: float, y: float, h: float, geometry: tuple, goal: np.
     for c in range(camera_dirs.shape[0]):
         decoy[c] = far
         if misread_on and u[base + 4 * n_sonar + 3 * c] < misread_chance:
-            direction = h + camera_dirs[c]
-            decoy[c] = camera_reading_among(x, y, direction, plates, params[3], params[1], far,
-                                            scene)[0]  # fmt: skip
+            camera_readings_among(x, y, h, camera_dirs[c : c + 1], plates, params[3], params[1],
+                                  far, scene, decoy[c : c + 1], eow_k[:0])  # fmt: skip
     _sonar(raw, rays, ray_cos, u, base, rparams, rflags, neighbours, echo, crossed, work)
     sonar_sources(rays, echo, crossed, ray_robot, u, base, rparams, rflags, neighbours,
                   sonar_robot)  # fmt: skip
