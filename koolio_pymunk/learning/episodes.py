@@ -53,7 +53,6 @@ import numpy as np
 
 from ..store.keyword import robot_offset, table_robots
 from ..task.env import KoolioEnv
-from ..task.seeding import seed_of
 
 #: Seed streams: training, evaluation and robot episodes of one seed never share starts.
 TRAIN_STREAM, EVAL_STREAM, ROBOT_STREAM = 0, 1, 2
@@ -78,6 +77,8 @@ def env_seed(seed: int, episode: int, stream: int = TRAIN_STREAM) -> int:
     """The environment seed of :func:`episode_seeds` alone (no agent generator made):
     ``SeedSequence([seed, episode, stream]).generate_state(1)[0]``
     (:func:`~koolio_pymunk.task.seeding.seed_of`)."""
+    from ..task.seeding import seed_of  # numba: loaded when an episode starts
+
     return seed_of([seed, episode, stream])
 
 
