@@ -23,11 +23,11 @@ decrements each array's reference count, an atomic operation: with the models in
 functions of their own, a third of a realistic reading's perf samples were in
 ``NRT_incref``/``NRT_decref`` (``docs/speed.md``). So the models' helpers are compiled inline
 into their caller (``inline="always"``), and :func:`sense_realism` calls the inline twins
-of :func:`~.ray_kernel.sense_one`, :func:`~.ray_kernel.camera_readings` and
-:func:`~.encoding_kernel.readout` (the same Python functions compiled a second time, with
-the functions they call that take arrays: :mod:`~.inline_twins`); the draws are read at an
-offset (``base``) instead of through a view. The arithmetic is the same operations in the
-same order (no fastmath), so the readings are the same bits.
+of :func:`~.ray_kernel.sense_one` and :func:`~.encoding_kernel.readout` (the same Python
+functions compiled a second time, with the functions they call that take arrays:
+:mod:`~.inline_twins`; the cameras stay a call of :func:`~.ray_kernel.camera_readings`);
+the draws are read at an offset (``base``) instead of through a view. The arithmetic is
+the same operations in the same order (no fastmath), so the readings are the same bits.
 """
 
 from __future__ import annotations
@@ -40,8 +40,8 @@ import numpy as np
 from ..store.kernel_cache import ensure_fresh
 from .encoding_kernel import readout_inline
 from .ray_kernel import (
+    camera_readings,
     camera_readings_among,
-    camera_readings_inline,
     sense_among_inline,
     sense_one_inline,
 )
@@ -305,8 +305,8 @@ def sense_realism(x: float, y: float, h: float, geometry: tuple, goal: np.ndarra
     for c in range(camera_dirs.shape[0]):
         decoy[c] = far
         if misread_on and u[base + 4 * n_sonar + 3 * c] < misread_chance:
-            camera_readings_inline(x, y, h, camera_dirs[c : c + 1], plates, params[3],
-                                   params[1], far, walls, decoy[c : c + 1], eow_k[:0])  # fmt: skip
+            camera_readings(x, y, h, camera_dirs[c : c + 1], plates, params[3], params[1], far,
+                            walls, decoy[c : c + 1], eow_k[:0])  # fmt: skip
     _sonar(raw, rays, ray_cos, u, base, rparams, rflags, neighbours, echo, crossed, work)
     _cameras(raw, n_sonar, decoy, u, base, rparams, rflags, missed, misread)
     return readout_inline(raw, noise, encoding, out, eow_k, codes)
