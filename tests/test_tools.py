@@ -153,6 +153,8 @@ def test_bench_runs_every_section_on_tiny_budgets(tools, tmp_path: Path) -> None
     assert report["vector"]["compiled"]["class_name"] == "KoolioVectorEnv"
     assert report["vector"]["sync"]["class_name"] == "SyncVectorEnv"
     assert report["checks"]["checks"] >= 1
+    assert report["checks"]["greedy_steps"] > 0  # the checks' greedy steps were counted
+    assert report["checks"]["greedy_to_training_cost_for_15"] > 0
     assert set(report["competence"]) == {"default", "one-step-q"}
     assert "engine.run" in " ".join(report["robots"]["where"]["parts"])
     assert "IR-SIM row skipped" in printed.getvalue()

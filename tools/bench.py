@@ -27,9 +27,11 @@ prints its rows; all go to ``--out`` as JSON; ``--only NAME ...`` runs some of t
   --eval-every``), greedy, of a table trained for 300 episodes: on the engine with one
   robot (what ``eval`` runs), with 64 robots, and in the Python loop; episodes and steps
   per second;
-* ``checks``: ``koolio-pm train --episodes 3000 --eval-every 100``: the share of the run
+* ``checks``: ``koolio-pm train --episodes 3000 --eval-every 250``: the share of the run
   spent in its checks (:class:`~koolio_pymunk.learning.evaluation.PeriodicCheck`, timed
-  around each check; and the seconds ``train`` writes in the evaluations file);
+  around each check; and the seconds ``train`` writes in the evaluations file), and the
+  bound a share of 15 % puts on a greedy step: the CPU time per greedy step of the checks
+  against per training step, and the most that ratio may be for 15 %;
 * ``robots``: ``koolio-pm train --robots 64`` end to end, robot-steps per second: with
   ``--config one-step-q``, with the default learner, and with the default learner in
   ``--world koolio-real``; then where a robot-step's time goes (CPU timers around the
@@ -488,6 +490,8 @@ def check_share(folder: Path, episodes: int, every: int) -> dict:
             eval_every=every,
         )
     check_cpu = timers.cpu[label]
+    greedy = sum(round(c.result.mean_steps * c.result.episodes) for c in res.checks)
+    train_cpu = t.cpu - check_cpu
     out = rates(res.steps, t)
     out.update(
         episodes=episodes,
@@ -496,6 +500,14 @@ def check_share(folder: Path, episodes: int, every: int) -> dict:
         check_cpu_s=round(check_cpu, 3),
         training_cpu_s=round(t.cpu - check_cpu, 3),
         check_share_cpu=round(check_cpu / max(1e-9, t.cpu), 3),
+        greedy_steps=greedy,
+        us_per_greedy_step=round(1e6 * check_cpu / max(1, greedy), 3),
+        us_per_training_step=round(1e6 * train_cpu / max(1, res.steps), 3),
+        # a share of 15 %: check_cpu <= 0.15 / 0.85 * train_cpu
+        greedy_to_training_cost=round(
+            (check_cpu / max(1, greedy)) / max(1e-12, train_cpu / max(1, res.steps)), 3
+        ),
+        greedy_to_training_cost_for_15=round(0.15 / 0.85 * res.steps / max(1, greedy), 3),
         check_seconds_reported=round(sum(c.seconds for c in res.checks), 3),
         train_seconds_reported=round(res.seconds, 3),
         last_goal_rate=res.checks[-1].result.goal_rate if res.checks else None,
@@ -1200,6 +1212,12 @@ def section_checks(b: Bench) -> None:
             f"checks, {c['check_cpu_s']:.2f} s; the evaluations file: "
             f"{c['check_seconds_reported']:.2f} s of {c['train_seconds_reported']:.2f})",
         )
+    )
+    print(
+        f"    a greedy step of the checks {c['us_per_greedy_step']:.2f} µs "
+        f"({c['greedy_steps']:,} steps), a training step {c['us_per_training_step']:.2f} µs "
+        f"({c['steps']:,}): ratio {c['greedy_to_training_cost']:.2f}; a 15 % share needs "
+        f"at most {c['greedy_to_training_cost_for_15']:.2f}"
     )
 
 
